@@ -1,0 +1,351 @@
+#include "embree_glue/embree_reference.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <memory>
+#include <string>
+#include <type_traits>
+
+#include "rebraid/error.h"
+
+namespace rebraid::glue {
+namespace {
+
+// Embree reads instance transforms straight from our AffineTransform and vertex/index data
+// is copied as whole Vec3f/Triangle records: both must be exactly the packed float/uint
+// layouts Embree names RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, RTC_FORMAT_FLOAT3 and
+// RTC_FORMAT_UINT3.
+static_assert(std::is_standard_layout_v<Vec3f> && sizeof(Vec3f) == 3 * sizeof(float));
+static_assert(sizeof(Triangle) == 3 * sizeof(unsigned int));
+static_assert(std::is_standard_layout_v<AffineTransform> &&
+              sizeof(AffineTransform) == 12 * sizeof(float));
+static_assert(offsetof(AffineTransform, col_x) == 0 * sizeof(float) &&
+              offsetof(AffineTransform, col_y) == 3 * sizeof(float) &&
+              offsetof(AffineTransform, col_z) == 6 * sizeof(float) &&
+              offsetof(AffineTransform, translation) == 9 * sizeof(float));
+
+RTCBuildQuality to_embree(EmbreeBuildQuality quality) {
+    switch (quality) {
+        case EmbreeBuildQuality::low:
+            return RTC_BUILD_QUALITY_LOW;
+        case EmbreeBuildQuality::medium:
+            return RTC_BUILD_QUALITY_MEDIUM;
+        case EmbreeBuildQuality::high:
+            return RTC_BUILD_QUALITY_HIGH;
+    }
+    throw Error("EmbreeReferenceSettings: unknown build quality " +
+                std::to_string(static_cast<int>(quality)));
+}
+
+/// Drops our reference to a geometry; a scene it is attached to holds its own.
+struct GeometryReleaser {
+    void operator()(RTCGeometry geometry) const { rtcReleaseGeometry(geometry); }
+};
+using GeometryReference = std::unique_ptr<std::remove_pointer_t<RTCGeometry>, GeometryReleaser>;
+
+GeometryReference new_geometry(EmbreeDevice& device, RTCGeometryType type) {
+    GeometryReference geometry(rtcNewGeometry(device.get(), type));
+    device.throw_if_error("rtcNewGeometry");
+    if (!geometry) throw Error("rtcNewGeometry: Embree returned no geometry");
+    return geometry;
+}
+
+void configure_scene(EmbreeDevice& device, RTCScene scene,
+                     const EmbreeReferenceSettings& settings) {
+    rtcSetSceneFlags(scene, settings.is_robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    device.throw_if_error("rtcSetSceneFlags");
+    rtcSetSceneBuildQuality(scene, to_embree(settings.build_quality));
+    device.throw_if_error("rtcSetSceneBuildQuality");
+}
+
+void commit_scene(EmbreeDevice& device, RTCScene scene) {
+    rtcCommitScene(scene);
+    device.throw_if_error("rtcCommitScene");
+}
+
+/// Attaches `mesh` as triangle geometry `geom_id` of `scene`, its vertices mapped by
+/// `to_world` (object space when null).
+void attach_triangle_mesh(EmbreeDevice& device, RTCScene scene, const Mesh& mesh,
+                          const AffineTransform* to_world, unsigned int geom_id,
+                          const EmbreeReferenceSettings& settings) {
+    GeometryReference geometry = new_geometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // Buffers Embree allocates itself are padded so that its 16-byte loads of the last vertex
+    // stay in bounds; a shared buffer over Mesh::positions would not be.
+    auto* vertices = static_cast<Vec3f*>(
+        rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                sizeof(Vec3f), mesh.positions.size()));
+    device.throw_if_error("rtcSetNewGeometryBuffer(vertex)");
+    auto* indices = static_cast<Triangle*>(
+        rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                sizeof(Triangle), mesh.triangles.size()));
+    device.throw_if_error("rtcSetNewGeometryBuffer(index)");
+    if (vertices == nullptr || indices == nullptr)
+        throw Error("rtcSetNewGeometryBuffer: Embree returned no buffer");
+
+    if (to_world != nullptr) {
+        std::transform(mesh.positions.begin(), mesh.positions.end(), vertices,
+                       [&](Vec3f p) { return to_world->transform_point(p); });
+    } else {
+        std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
+    }
+    std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
+
+    // Only matters at low scene quality, where Embree builds one BVH per geometry.
+    rtcSetGeometryBuildQuality(geometry.get(), to_embree(settings.build_quality));
+    rtcCommitGeometry(geometry.get());
+    device.throw_if_error("rtcCommitGeometry(triangles)");
+    rtcAttachGeometryByID(scene, geometry.get(), geom_id);
+    device.throw_if_error("rtcAttachGeometryByID(triangles)");
+}
+
+/// What happens to a ray before it may reach Embree.
+enum class RayCheck { trace, empty_segment };
+
+/// Checks what Embree's single-ray kernels assert on (Debian's build keeps the assertions,
+/// so an invalid ray would abort the whole process). `accel_name` names the caller in errors.
+RayCheck check_ray(const Ray& ray, const EmbreeRayLimits& limits, const char* accel_name) {
+    // No t satisfies tnear <= t <= tfar (this also catches NaN bounds): a miss by contract.
+    // Embree itself treats tnear > tfar as an inactive ray, but not NaN.
+    if (!(ray.tnear <= ray.tfar)) return RayCheck::empty_segment;
+    if (ray.tnear < 0.0f)
+        throw Error(std::string(accel_name) + ": ray tnear " + std::to_string(ray.tnear) +
+                    " is negative; Embree only traces segments with tnear >= 0");
+    for (int axis = 0; axis < 3; ++axis) {
+        if (!(std::fabs(ray.org[axis]) <= limits.max_origin_coordinate))
+            throw Error(std::string(accel_name) + ": ray origin coordinate " +
+                        std::to_string(ray.org[axis]) + " is not finite or beyond " +
+                        std::to_string(limits.max_origin_coordinate) +
+                        ", the largest Embree can trace in this scene");
+        if (!(std::fabs(ray.dir[axis]) <= limits.max_direction_coordinate))
+            throw Error(std::string(accel_name) + ": ray direction coordinate " +
+                        std::to_string(ray.dir[axis]) + " is not finite or beyond " +
+                        std::to_string(limits.max_direction_coordinate) +
+                        ", the largest Embree can trace in this scene");
+    }
+    return RayCheck::trace;
+}
+
+/// Limits for world-space rays such that every instance's object-space image of the ray still
+/// passes Embree's check. With L the inverse linear part and t the translation, the image of
+/// an origin o is L (o - t), bounded by |L|_inf (|o|_inf + |t|_inf) per coordinate.
+EmbreeRayLimits instanced_ray_limits(const Scene& scene) {
+    EmbreeRayLimits limits;
+    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+        const AffineTransform& to_world = scene.instances[i].object_to_world;
+        const AffineTransform to_object = to_world.inverse();
+        float norm = 0.0f;  // infinity norm: largest row sum of absolute entries
+        for (int row = 0; row < 3; ++row)
+            norm =
+                std::max(norm, std::fabs(to_object.col_x[row]) + std::fabs(to_object.col_y[row]) +
+                                   std::fabs(to_object.col_z[row]));
+        if (!to_object.is_finite() || !std::isfinite(norm) || norm <= 0.0f)
+            throw Error("EmbreeInstancedAccel: instance " + std::to_string(i) +
+                        " has a transform whose inverse is not finite in float (determinant " +
+                        std::to_string(to_world.determinant()) + ")");
+        const float largest_translation =
+            std::max({std::fabs(to_world.translation.x), std::fabs(to_world.translation.y),
+                      std::fabs(to_world.translation.z)});
+        limits.max_direction_coordinate =
+            std::min(limits.max_direction_coordinate, kEmbreeLargestRayCoordinate / norm);
+        limits.max_origin_coordinate = std::min(
+            limits.max_origin_coordinate, kEmbreeLargestRayCoordinate / norm - largest_translation);
+    }
+    return limits;
+}
+
+RTCRay to_embree(const Ray& ray) {
+    RTCRay out{};
+    out.org_x = ray.org.x;
+    out.org_y = ray.org.y;
+    out.org_z = ray.org.z;
+    out.tnear = ray.tnear;
+    out.dir_x = ray.dir.x;
+    out.dir_y = ray.dir.y;
+    out.dir_z = ray.dir.z;
+    out.time = 0.0f;
+    out.tfar = ray.tfar;
+    out.mask = std::numeric_limits<unsigned int>::max();  // every geometry is visible
+    out.id = 0;
+    out.flags = 0;
+    return out;
+}
+
+/// Which Embree id names the instance in a hit.
+enum class InstanceIdSource { geom_id, inst_id };
+
+Hit intersect_scene(RTCScene scene, const Ray& ray, InstanceIdSource source,
+                    const EmbreeRayLimits& limits, const char* accel_name) {
+    if (check_ray(ray, limits, accel_name) == RayCheck::empty_segment) return Hit{};
+    RTCRayHit rayhit{};
+    rayhit.ray = to_embree(ray);
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(scene, &context, &rayhit);
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
+    Hit hit;
+    hit.t = rayhit.ray.tfar;
+    hit.instance_id =
+        source == InstanceIdSource::geom_id ? rayhit.hit.geomID : rayhit.hit.instID[0];
+    hit.prim_id = rayhit.hit.primID;
+    hit.u = rayhit.hit.u;
+    hit.v = rayhit.hit.v;
+    return hit;
+}
+
+bool occluded_scene(RTCScene scene, const Ray& ray, const EmbreeRayLimits& limits,
+                    const char* accel_name) {
+    if (check_ray(ray, limits, accel_name) == RayCheck::empty_segment) return false;
+    RTCRay embree_ray = to_embree(ray);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcOccluded1(scene, &context, &embree_ray);
+    // Embree marks an occluded ray by setting tfar to -inf; the segment check above rules out
+    // an input tfar of -inf.
+    return embree_ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+/// Counts shared by both structures; build time and memory are filled in after the build.
+AccelStats input_stats(const Scene& scene) {
+    AccelStats stats;
+    stats.triangles = scene.instanced_triangle_count();
+    stats.instances = scene.instances.size();
+    stats.meshes = scene.meshes.size();
+    return stats;
+}
+
+void validate_input(const Scene& scene, const char* accel_name) {
+    try {
+        scene.validate();
+    } catch (const Error& error) {
+        throw Error(std::string(accel_name) + ": " + error.what());
+    }
+}
+
+double milliseconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+        .count();
+}
+
+}  // namespace
+
+// ---- EmbreeFlatAccel ---------------------------------------------------------------------
+
+EmbreeFlatAccel::EmbreeFlatAccel(const Scene& scene, const EmbreeReferenceSettings& settings)
+    : device_(settings.device_config), scene_(device_), stats_(input_stats(scene)) {
+    validate_input(scene, "EmbreeFlatAccel");
+    const auto start = std::chrono::steady_clock::now();
+    configure_scene(device_, scene_.get(), settings);
+    // One geometry per instance rather than one big geometry plus a prim -> (instance, prim)
+    // table: geomID is then the instance id and primID the mesh's own triangle index.
+    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+        const Instance& instance = scene.instances[i];
+        const Mesh& mesh = scene.meshes[instance.mesh_id];
+        if (mesh.triangles.empty()) continue;  // nothing to hit: no geometry, the id stays unused
+        try {
+            attach_triangle_mesh(device_, scene_.get(), mesh, &instance.object_to_world,
+                                 static_cast<unsigned int>(i), settings);
+        } catch (const Error& error) {
+            throw Error("EmbreeFlatAccel: instance " + std::to_string(i) + " (mesh " +
+                        std::to_string(instance.mesh_id) + "): " + error.what());
+        }
+    }
+    try {
+        commit_scene(device_, scene_.get());
+    } catch (const Error& error) {
+        throw Error(std::string("EmbreeFlatAccel: ") + error.what());
+    }
+    stats_.build_ms = milliseconds_since(start);
+    stats_.memory_bytes =
+        static_cast<std::uint64_t>(std::max<std::int64_t>(device_.allocated_bytes(), 0));
+}
+
+Hit EmbreeFlatAccel::intersect_counted(const Ray& ray, TraversalCounters* /*counters*/) const {
+    return intersect_scene(scene_.get(), ray, InstanceIdSource::geom_id, EmbreeRayLimits{},
+                           "EmbreeFlatAccel");
+}
+
+bool EmbreeFlatAccel::occluded(const Ray& ray) const {
+    return occluded_scene(scene_.get(), ray, EmbreeRayLimits{}, "EmbreeFlatAccel");
+}
+
+AccelStats EmbreeFlatAccel::stats() const {
+    return stats_;
+}
+
+// ---- EmbreeInstancedAccel ----------------------------------------------------------------
+
+EmbreeInstancedAccel::EmbreeInstancedAccel(const Scene& scene,
+                                           const EmbreeReferenceSettings& settings)
+    : device_(settings.device_config), top_scene_(device_), stats_(input_stats(scene)) {
+    validate_input(scene, "EmbreeInstancedAccel");
+    ray_limits_ = instanced_ray_limits(scene);
+    const auto start = std::chrono::steady_clock::now();
+
+    // Object level: one committed scene per mesh, geometry 0 in object space. A mesh without
+    // triangles gets an empty scene, which instances may reference harmlessly.
+    mesh_scenes_.reserve(scene.meshes.size());
+    for (std::size_t m = 0; m < scene.meshes.size(); ++m) {
+        const Mesh& mesh = scene.meshes[m];
+        try {
+            EmbreeSceneHandle& mesh_scene = mesh_scenes_.emplace_back(device_);
+            configure_scene(device_, mesh_scene.get(), settings);
+            if (!mesh.triangles.empty())
+                attach_triangle_mesh(device_, mesh_scene.get(), mesh, nullptr, 0, settings);
+            commit_scene(device_, mesh_scene.get());
+        } catch (const Error& error) {
+            throw Error("EmbreeInstancedAccel: mesh " + std::to_string(m) + " ('" + mesh.name +
+                        "'): " + error.what());
+        }
+    }
+
+    // Top level: instance i is geometry i, so Embree reports it in instID[0].
+    configure_scene(device_, top_scene_.get(), settings);
+    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+        const Instance& instance = scene.instances[i];
+        try {
+            GeometryReference geometry = new_geometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(geometry.get(), mesh_scenes_[instance.mesh_id].get());
+            device_.throw_if_error("rtcSetGeometryInstancedScene");
+            // AffineTransform is laid out as RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR (checked above).
+            rtcSetGeometryTransform(geometry.get(), 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                                    &instance.object_to_world);
+            device_.throw_if_error("rtcSetGeometryTransform");
+            rtcCommitGeometry(geometry.get());
+            device_.throw_if_error("rtcCommitGeometry(instance)");
+            rtcAttachGeometryByID(top_scene_.get(), geometry.get(), static_cast<unsigned int>(i));
+            device_.throw_if_error("rtcAttachGeometryByID(instance)");
+        } catch (const Error& error) {
+            throw Error("EmbreeInstancedAccel: instance " + std::to_string(i) + " (mesh " +
+                        std::to_string(instance.mesh_id) + "): " + error.what());
+        }
+    }
+    try {
+        commit_scene(device_, top_scene_.get());
+    } catch (const Error& error) {
+        throw Error(std::string("EmbreeInstancedAccel: top level: ") + error.what());
+    }
+    stats_.build_ms = milliseconds_since(start);
+    stats_.memory_bytes =
+        static_cast<std::uint64_t>(std::max<std::int64_t>(device_.allocated_bytes(), 0));
+}
+
+Hit EmbreeInstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* /*counters*/) const {
+    return intersect_scene(top_scene_.get(), ray, InstanceIdSource::inst_id, ray_limits_,
+                           "EmbreeInstancedAccel");
+}
+
+bool EmbreeInstancedAccel::occluded(const Ray& ray) const {
+    return occluded_scene(top_scene_.get(), ray, ray_limits_, "EmbreeInstancedAccel");
+}
+
+AccelStats EmbreeInstancedAccel::stats() const {
+    return stats_;
+}
+
+}  // namespace rebraid::glue

@@ -1,0 +1,49 @@
+// The `rebraid` command: one executable, one subcommand per task (see README).
+#include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+#include <optional>
+
+#include "commands.h"
+#include "rebraid/error.h"
+
+int main(int argc, char** argv) {
+    using namespace rebraid::cli;
+    std::ios::sync_with_stdio(false);
+
+    CLI::App app{"rebraid: re-braided two-level BVHs for instanced scenes"};
+    app.require_subcommand(1);
+    app.footer(
+        "A SCENE is a .gltf or .glb file; without one, commands use the built-in "
+        "default scene.\nRun 'rebraid COMMAND --help' for a command's options.");
+
+    CommonOptions common;
+    CommandAction action;
+    add_trace_command(app, common, action);
+    add_stats_command(app, common, action);
+    add_render_command(app, common, action);
+    add_rays_command(app, common, action);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+
+    try {
+        // Lives for the whole run, so every TBB algorithm the command calls honours it.
+        std::optional<tbb::global_control> thread_limit;
+        if (common.threads > 0)
+            thread_limit.emplace(tbb::global_control::max_allowed_parallelism,
+                                 static_cast<std::size_t>(common.threads));
+        if (action) action();
+    } catch (const rebraid::Error& e) {
+        std::cerr << "rebraid: " << e.what() << "\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "rebraid: unexpected error: " << e.what() << "\n";
+        return 1;
+    }
+    return 0;
+}

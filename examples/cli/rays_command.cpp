@@ -1,0 +1,51 @@
+// `rebraid rays [SCENE] --count N`: a reproducible ray file of random rays around the scene.
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "output_file.h"
+#include "rebraid/random_rays.h"
+#include "rebraid/ray_file.h"
+#include "scene_source.h"
+
+namespace rebraid::cli {
+
+namespace {
+
+struct RaysOptions {
+    std::string scene_path;  ///< empty: the default scene
+    std::size_t count = 0;
+    std::uint64_t seed = 1;
+    std::string rays_path;  ///< empty: standard output
+};
+
+void run_rays(const RaysOptions& options) {
+    const Scene scene = load_scene(options.scene_path);
+    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), options.count, options.seed);
+    write_output(options.rays_path, [&](std::ostream& out) { write_rays(out, rays); });
+}
+
+}  // namespace
+
+void add_rays_command(CLI::App& app, CommonOptions& common, CommandAction& action) {
+    auto options = std::make_shared<RaysOptions>();
+    CLI::App* command = app.add_subcommand(
+        "rays",
+        "Write a ray file of random rays: origins in and around the scene bounds, directions "
+        "uniform on the sphere; the same seed gives the same file.");
+    command
+        ->add_option("SCENE", options->scene_path,
+                     "scene file (.gltf/.glb; the default scene when omitted)")
+        ->type_name("PATH");
+    command->add_option("-n,--count", options->count, "number of rays")->required();
+    command->add_option("-o,--output", options->rays_path, "ray file (default: standard output)")
+        ->type_name("RAYS");
+    command->add_option("--seed", options->seed, "random seed")->capture_default_str();
+    add_common_options(*command, common);
+    command->callback([options, &action] { action = [options] { run_rays(*options); }; });
+}
+
+}  // namespace rebraid::cli

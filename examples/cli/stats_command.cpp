@@ -1,0 +1,122 @@
+// `rebraid stats [SCENE]`: build a structure and report its size, build time and quality.
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <type_traits>
+
+#include "accel_factory.h"
+#include "commands.h"
+#include "scene_source.h"
+
+namespace rebraid::cli {
+
+namespace {
+
+struct StatsOptions {
+    std::string scene_path;  ///< empty: the default scene
+    std::string accel_name;
+    bool is_json = false;
+};
+
+/// Calls `visit(key, value)` for every AccelStats field, keys named as the struct's fields.
+/// Optional fields are passed as std::optional; a new field of AccelStats is one line here.
+template <class Visitor>
+void for_each_stats_field(const AccelStats& stats, Visitor&& visit) {
+    visit("triangles", stats.triangles);
+    visit("instances", stats.instances);
+    visit("meshes", stats.meshes);
+    visit("build_ms", stats.build_ms);
+    visit("top_build_ms", stats.top_build_ms);
+    visit("sah", stats.sah);
+    visit("nodes", stats.nodes);
+    visit("leaves", stats.leaves);
+    visit("memory_bytes", stats.memory_bytes);
+    visit("structure_hash", stats.structure_hash);
+    visit("brefs", stats.brefs);
+    visit("budget", stats.budget);
+    visit("opened", stats.opened);
+}
+
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+
+nlohmann::ordered_json stats_to_json(const AccelStats& stats) {
+    nlohmann::ordered_json json;
+    for_each_stats_field(stats, [&](std::string_view key, const auto& value) {
+        if constexpr (IsOptional<std::decay_t<decltype(value)>>::value) {
+            if (value) json[std::string(key)] = *value;
+        } else {
+            json[std::string(key)] = value;
+        }
+    });
+    return json;
+}
+
+void print_stats_text(std::ostream& out, const std::string& scene_name,
+                      const std::string& accel_name, const AccelStats& stats) {
+    constexpr int kKeyWidth = 16;
+    out << std::left << std::setw(kKeyWidth) << "scene" << scene_name << "\n"
+        << std::setw(kKeyWidth) << "accel" << accel_name << "\n";
+    auto print_value = [&](std::string_view key, auto value) {
+        out << std::setw(kKeyWidth) << key;
+        if constexpr (std::is_floating_point_v<decltype(value)>)
+            out << std::fixed << std::setprecision(key.ends_with("_ms") ? 3 : 6) << value
+                << std::defaultfloat;
+        else
+            out << value;
+        out << "\n";
+    };
+    for_each_stats_field(stats, [&](std::string_view key, const auto& value) {
+        if constexpr (IsOptional<std::decay_t<decltype(value)>>::value) {
+            if (value) print_value(key, *value);
+        } else {
+            print_value(key, value);
+        }
+    });
+}
+
+void run_stats(const StatsOptions& options) {
+    find_accel(options.accel_name);
+    const Scene scene = load_scene(options.scene_path);
+    const std::unique_ptr<Accel> accel = build_accel(options.accel_name, scene);
+    const AccelStats stats = accel->stats();
+    if (options.is_json) {
+        nlohmann::ordered_json json;
+        json["scene"] = describe_scene(options.scene_path);
+        json["accel"] = options.accel_name;
+        json.update(stats_to_json(stats));
+        std::cout << json.dump(2) << "\n";
+    } else {
+        print_stats_text(std::cout, describe_scene(options.scene_path), options.accel_name, stats);
+    }
+}
+
+}  // namespace
+
+void add_stats_command(CLI::App& app, CommonOptions& common, CommandAction& action) {
+    auto options = std::make_shared<StatsOptions>();
+    CLI::App* command = app.add_subcommand(
+        "stats",
+        "Build a structure and print its triangles, instances, meshes, build time and "
+        "every statistic it reports.");
+    command
+        ->add_option("SCENE", options->scene_path,
+                     "scene file (.gltf/.glb; the default scene when omitted)")
+        ->type_name("PATH");
+    add_accel_option(*command, options->accel_name);
+    command->add_flag("--json", options->is_json,
+                      "print one JSON object (keys as the AccelStats fields, plus scene and "
+                      "accel)");
+    add_common_options(*command, common);
+    command->callback([options, &action] { action = [options] { run_stats(*options); }; });
+}
+
+}  // namespace rebraid::cli

@@ -1,0 +1,81 @@
+// `rebraid trace [SCENE] RAYS`: closest hits of a ray file, one line per ray in input order.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <CLI/CLI.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "accel_factory.h"
+#include "commands.h"
+#include "output_file.h"
+#include "rebraid/ray_file.h"
+#include "scene_source.h"
+
+namespace rebraid::cli {
+
+namespace {
+
+struct TraceOptions {
+    /// One or two positionals: RAYS, or SCENE RAYS (see run_trace).
+    std::vector<std::string> paths;
+    std::string accel_name;
+    std::string hits_path;  ///< empty: standard output
+};
+
+/// CLI11 writes a positional taking one or two values as "NAME(1x)" in the usage line; the
+/// name "[SCENE] RAYS" already says it all.
+class TraceUsageFormatter : public CLI::Formatter {
+public:
+    std::string make_option_usage(const CLI::Option* option) const override {
+        return make_option_name(option, true);
+    }
+};
+
+void run_trace(const TraceOptions& options) {
+    // SCENE is optional but comes first, so the positionals are taken as one list and the
+    // last one is always the ray file.
+    const std::string rays_path = options.paths.back();
+    const std::string scene_path = options.paths.size() == 2 ? options.paths.front() : "";
+
+    find_accel(options.accel_name);
+    // Read the rays before the (slower) build so a bad ray file fails fast.
+    const std::vector<Ray> rays = read_ray_file(rays_path);
+    const Scene scene = load_scene(scene_path);
+    const std::unique_ptr<Accel> accel = build_accel(options.accel_name, scene);
+
+    // Each ray writes its own slot, so the output order is the input order on any thread count.
+    std::vector<Hit> hits(rays.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t i = range.begin(); i != range.end(); ++i)
+                              hits[i] = accel->intersect(rays[i]);
+                      });
+
+    write_output(options.hits_path, [&](std::ostream& out) { write_hits(out, hits); });
+}
+
+}  // namespace
+
+void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& action) {
+    auto options = std::make_shared<TraceOptions>();
+    CLI::App* command = app.add_subcommand(
+        "trace",
+        "Trace a ray file and write the closest hit of every ray, one line per ray in input "
+        "order: 't instID primID', or 'inf -1 -1' for a miss.");
+    command
+        ->add_option("[SCENE] RAYS", options->paths,
+                     "an optional scene file (.gltf/.glb; the default scene when omitted), "
+                     "then the ray file (one ray per line: ox oy oz dx dy dz tnear tfar)")
+        ->expected(1, 2)
+        ->required()
+        ->type_name("");
+    command->formatter(std::make_shared<TraceUsageFormatter>());
+    add_accel_option(*command, options->accel_name);
+    command->add_option("-o,--output", options->hits_path, "hit file (default: standard output)")
+        ->type_name("HITS");
+    add_common_options(*command, common);
+    command->callback([options, &action] { action = [options] { run_trace(*options); }; });
+}
+
+}  // namespace rebraid::cli

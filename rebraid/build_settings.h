@@ -1,0 +1,28 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace rebraid {
+
+/// Parameters of the binned-SAH wide-BVH builder (object BVHs, the flat BVH and the top
+/// levels). Defaults are the values the benchmarks in bench/RESULTS.md use.
+struct BuildSettings {
+    /// SAH bins per axis; more bins find better splits at a higher build cost.
+    std::uint32_t bin_count = 32;
+    /// Leaves hold at most this many primitives (1..16); larger leaves build faster and
+    /// trace slower.
+    std::uint32_t max_leaf_size = 4;
+    /// SAH cost of visiting a node, relative to `intersection_cost`.
+    float traversal_cost = 1.0f;
+    /// SAH cost of one primitive test.
+    float intersection_cost = 1.0f;
+    /// Ranges with fewer primitives are built by one task, serially (binning, partitioning
+    /// and recursion); the tree does not depend on this value or the thread count.
+    std::size_t parallel_threshold = 8192;
+
+    /// Throws rebraid::Error naming the field and value when a setting is out of range.
+    void validate() const;
+};
+
+}  // namespace rebraid

@@ -1,0 +1,77 @@
+#include "rebraid/bvh_stats.h"
+
+#include <tbb/parallel_for.h>
+
+#include <vector>
+
+namespace rebraid {
+namespace {
+
+/// Sum of half areas of the top-level inner nodes below `ref` (whose box is `box`).
+double top_inner_cost(const TopLevelBvh& top, NodeRef ref, const BBox3f& box) {
+    if (!ref.is_inner()) return 0.0;
+    const WideNode& node = top.nodes[ref.node_id()];
+    double cost = box.half_area();
+    for (int i = 0; i < kBvhWidth && !node.children[i].is_empty(); ++i)
+        cost += top_inner_cost(top, node.children[i], node.child_bounds(i));
+    return cost;
+}
+
+}  // namespace
+
+TreeCounts count_tree(std::span<const WideNode> nodes, NodeRef root) {
+    TreeCounts counts;
+    if (root.is_empty()) return counts;
+    if (root.is_leaf()) return {0, 1};
+    std::vector<NodeRef> stack{root};
+    while (!stack.empty()) {
+        const NodeRef ref = stack.back();
+        stack.pop_back();
+        ++counts.inner_nodes;
+        for (NodeRef child : nodes[ref.node_id()].children) {
+            if (child.is_leaf()) ++counts.leaves;
+            if (child.is_inner()) stack.push_back(child);
+        }
+    }
+    return counts;
+}
+
+double object_subtree_cost(const ObjectBvh& bvh, NodeRef ref, const BBox3f& world_box,
+                           const AffineTransform& object_to_world) {
+    if (ref.is_empty()) return 0.0;
+    if (ref.is_leaf()) return double(world_box.half_area()) * ref.prim_count();
+    const WideNode& node = bvh.nodes[ref.node_id()];
+    double cost = world_box.half_area();
+    for (int i = 0; i < kBvhWidth && !node.children[i].is_empty(); ++i)
+        cost += object_subtree_cost(bvh, node.children[i],
+                                    object_to_world.transform_bbox(node.child_bounds(i)),
+                                    object_to_world);
+    return cost;
+}
+
+double object_bvh_sah(const ObjectBvh& bvh) {
+    const double root_area = bvh.bounds.half_area();
+    if (root_area <= 0.0) return 0.0;
+    return object_subtree_cost(bvh, bvh.root, bvh.bounds, AffineTransform::identity()) / root_area;
+}
+
+double top_level_sah(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,
+                     std::span<const std::uint32_t> instance_mesh,
+                     std::span<const AffineTransform> object_to_world) {
+    const double root_area = top.bounds.half_area();
+    if (root_area <= 0.0) return 0.0;
+    // Items in parallel; the partial costs are summed in item order so the total is
+    // reproducible to the last bit.
+    std::vector<double> item_costs(top.items.size());
+    tbb::parallel_for(std::size_t(0), top.items.size(), [&](std::size_t i) {
+        const TopLevelItem& item = top.items[i];
+        item_costs[i] =
+            object_subtree_cost(object_bvhs[instance_mesh[item.instance_id]], item.object_node,
+                                top.item_bounds[i], object_to_world[item.instance_id]);
+    });
+    double cost = top_inner_cost(top, top.root, top.bounds);
+    for (double c : item_costs) cost += c;
+    return cost / root_area;
+}
+
+}  // namespace rebraid

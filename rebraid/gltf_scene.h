@@ -1,0 +1,61 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rebraid/scene.h"
+
+namespace rebraid {
+
+/// Limits and switches of the glTF loader. The limits guard against memory bombs: a file whose
+/// (valid-looking) accessors would make the loader allocate more than this is rejected with a
+/// rebraid::Error before the memory is taken.
+struct GltfLoadOptions {
+    /// Maximum triangles over all glTF meshes (each mesh counted once, not per instance).
+    std::uint64_t max_triangles = 1'000'000'000;
+    /// Maximum vertex positions over all glTF meshes (a POSITION accessor shared by several
+    /// primitives counts once per primitive, as the loader copies it per primitive).
+    std::uint64_t max_vertices = 1'000'000'000;
+};
+
+/// What the loader saw besides the scene: useful for tools that explain a file and for the
+/// animation loader, which needs to know which glTF node each instance came from.
+struct GltfLoadReport {
+    /// Primitives per glTF topology mode (index = `mode`, 0 POINTS ... 6 TRIANGLE_FAN), over all
+    /// meshes. Modes 0-3 are skipped by the loader; 4-6 become triangles.
+    std::array<std::uint64_t, 7> primitive_count_by_mode{};
+    /// glTF node index of every instance, in instance order (Scene::instances[i] came from node
+    /// instance_node_ids[i]).
+    std::vector<std::uint32_t> instance_node_ids;
+    /// Index of the glTF scene that was loaded (the default scene).
+    std::uint32_t scene_id = 0;
+    /// Instances whose node has a skin (loaded in the rest pose, skin ignored).
+    std::uint64_t skinned_instance_count = 0;
+    /// Primitives with morph targets (loaded with the base positions, targets ignored).
+    std::uint64_t morphed_primitive_count = 0;
+
+    /// Primitives of modes POINTS, LINES, LINE_LOOP and LINE_STRIP, which the loader skipped.
+    std::uint64_t skipped_primitive_count() const {
+        return primitive_count_by_mode[0] + primitive_count_by_mode[1] +
+               primitive_count_by_mode[2] + primitive_count_by_mode[3];
+    }
+};
+
+/// A loaded scene together with the loader's report.
+struct GltfLoadResult {
+    Scene scene;
+    GltfLoadReport report;
+};
+
+/// Loads a .gltf or .glb file into a Scene following the project's conventions (README "Scene
+/// conventions").
+Scene load_gltf_scene(const std::string& path, const GltfLoadOptions& options = {});
+
+/// As load_gltf_scene(), and also returns what the loader saw (see GltfLoadReport).
+/// Throws rebraid::Error naming the file and the problem for any bad input.
+GltfLoadResult load_gltf_scene_with_report(const std::string& path,
+                                           const GltfLoadOptions& options = {});
+
+}  // namespace rebraid

@@ -1,0 +1,110 @@
+#include "rebraid/instanced_accel.h"
+
+#include <chrono>
+
+#include "rebraid/bvh_stats.h"
+#include "rebraid/object_traversal.h"
+#include "rebraid/structure_hash.h"
+#include "rebraid/traversal.h"
+#include "rebraid/two_level_builder.h"
+
+namespace rebraid {
+
+InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs,
+                               TopLevelBvh top, const AccelStats& build_info)
+    : object_bvhs_(std::move(object_bvhs)), top_(std::move(top)), build_info_(build_info) {
+    instance_mesh_.reserve(scene.instances.size());
+    object_to_world_.reserve(scene.instances.size());
+    world_to_object_.reserve(scene.instances.size());
+    for (const Instance& instance : scene.instances) {
+        instance_mesh_.push_back(instance.mesh_id);
+        object_to_world_.push_back(instance.object_to_world);
+        world_to_object_.push_back(instance.object_to_world.inverse());
+    }
+    build_info_.triangles = scene.instanced_triangle_count();
+    build_info_.instances = scene.instances.size();
+    build_info_.meshes = scene.meshes.size();
+}
+
+Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
+    Hit hit;
+    TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    traverse_bvh(top_.nodes.data(), top_.root, world_ray, counters, [&](NodeRef leaf) {
+        const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
+        for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
+            const TopLevelItem& item = top_.items[i];
+            const AffineTransform& to_object = world_to_object_[item.instance_id];
+            // t is invariant under the affine map, so tnear/tfar carry over unchanged.
+            TraversalRay object_ray(to_object.transform_point(ray.org),
+                                    to_object.transform_vector(ray.dir), world_ray.tnear,
+                                    world_ray.tfar);
+            if (intersect_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
+                                     item.object_node, object_ray, hit, counters)) {
+                world_ray.tfar = object_ray.tfar;
+                hit.instance_id = item.instance_id;
+            }
+        }
+        return false;
+    });
+    return hit;
+}
+
+bool InstancedAccel::occluded(const Ray& ray) const {
+    TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    return traverse_bvh(top_.nodes.data(), top_.root, world_ray, nullptr, [&](NodeRef leaf) {
+        const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
+        for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
+            const TopLevelItem& item = top_.items[i];
+            const AffineTransform& to_object = world_to_object_[item.instance_id];
+            TraversalRay object_ray(to_object.transform_point(ray.org),
+                                    to_object.transform_vector(ray.dir), world_ray.tnear,
+                                    world_ray.tfar);
+            if (occluded_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
+                                    item.object_node, object_ray, nullptr))
+                return true;
+        }
+        return false;
+    });
+}
+
+AccelStats InstancedAccel::stats() const {
+    AccelStats stats = build_info_;
+    stats.sah = top_level_sah(top_, object_bvhs_, instance_mesh_, object_to_world_);
+    const TreeCounts top_counts = count_tree(top_.nodes, top_.root);
+    std::uint64_t nodes = top_counts.inner_nodes, leaves = 0, memory = top_.memory_bytes();
+    StructureHash hash;
+    hash.add<WideNode>(top_.nodes);
+    hash.add_value(top_.root);
+    hash.add<TopLevelItem>(top_.items);
+    for (const ObjectBvh& bvh : object_bvhs_) {
+        const TreeCounts counts = count_tree(bvh.nodes, bvh.root);
+        nodes += counts.inner_nodes;
+        leaves += counts.leaves;
+        memory += bvh.memory_bytes();
+        hash.add<WideNode>(bvh.nodes);
+        hash.add_value(bvh.root);
+        hash.add<PrimId>(bvh.prim_ids);
+    }
+    memory += (object_to_world_.size() + world_to_object_.size()) * sizeof(AffineTransform);
+    stats.nodes = nodes;
+    stats.leaves = leaves;
+    stats.memory_bytes = memory;
+    stats.structure_hash = hash.value();
+    return stats;
+}
+
+InstancedAccel build_two_level_accel(const Scene& scene, const ObjectBvhBuilder& object_builder,
+                                     const BuildSettings& top_settings) {
+    scene.validate();
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<ObjectBvh> object_bvhs = build_object_bvhs(scene, object_builder);
+    TopLevelBvh top = build_two_level(scene, object_bvhs, top_settings);
+    AccelStats info;
+    info.build_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count();
+    info.top_build_ms = top.build_ms;
+    return InstancedAccel(scene, std::move(object_bvhs), std::move(top), info);
+}
+
+}  // namespace rebraid

@@ -1,0 +1,49 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rebraid/accel.h"
+#include "rebraid/build_settings.h"
+#include "rebraid/object_bvh.h"
+#include "rebraid/object_bvh_set.h"
+#include "rebraid/scene.h"
+#include "rebraid/top_level_bvh.h"
+
+namespace rebraid {
+
+/// A two-level structure: object BVHs per mesh plus a top level whose leaves reference
+/// (instance, object node) pairs. Serves both the plain two-level top and the re-braided one:
+/// the same traversal runs on both (paper §5.5). A ray entering a leaf item is mapped into
+/// the instance's object space once per item and continues at the item's object node.
+class InstancedAccel final : public Accel {
+public:
+    /// `build_info` carries the build timings and builder-specific figures (BRefs, budget)
+    /// for stats(); the rest of the statistics are computed from the structure.
+    InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs, TopLevelBvh top,
+                   const AccelStats& build_info);
+
+    Hit intersect_counted(const Ray& ray, TraversalCounters* counters) const override;
+    bool occluded(const Ray& ray) const override;
+    AccelStats stats() const override;
+
+    const TopLevelBvh& top_level() const { return top_; }
+    const std::vector<ObjectBvh>& object_bvhs() const { return object_bvhs_; }
+    /// Mesh of each instance (index = InstanceId).
+    const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
+
+private:
+    std::vector<ObjectBvh> object_bvhs_;
+    TopLevelBvh top_;
+    std::vector<std::uint32_t> instance_mesh_;
+    std::vector<AffineTransform> object_to_world_;
+    std::vector<AffineTransform> world_to_object_;
+    AccelStats build_info_;
+};
+
+/// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).
+InstancedAccel build_two_level_accel(const Scene& scene,
+                                     const ObjectBvhBuilder& object_builder = own_object_bvh_builder(),
+                                     const BuildSettings& top_settings = {.max_leaf_size = 1});
+
+}  // namespace rebraid

@@ -1,0 +1,50 @@
+#include "rebraid/object_bvh.h"
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+
+namespace rebraid {
+
+std::uint64_t ObjectBvh::memory_bytes() const {
+    return nodes.size() * sizeof(WideNode) + prim_ids.size() * sizeof(PrimId) +
+           triangles.size() * sizeof(TriangleVerts);
+}
+
+std::vector<BuildPrim> make_triangle_build_prims(const Mesh& mesh) {
+    std::vector<BuildPrim> prims(mesh.triangles.size());
+    tbb::parallel_for(std::size_t(0), prims.size(), [&](std::size_t i) {
+        BBox3f box;
+        for (Vec3f corner : mesh.corners(PrimId(i))) box.extend(corner);
+        prims[i] = {box, std::uint32_t(i), 1};
+    });
+    return prims;
+}
+
+ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> leaf_prims) {
+    ObjectBvh bvh;
+    bvh.nodes = std::move(tree.nodes);
+    bvh.root = tree.root;
+    bvh.bounds = tree.bounds;
+    bvh.prim_ids = std::move(leaf_prims);
+    bvh.triangles.resize(bvh.prim_ids.size());
+    tbb::parallel_for(std::size_t(0), bvh.prim_ids.size(), [&](std::size_t i) {
+        const auto corners = mesh.corners(bvh.prim_ids[i]);
+        bvh.triangles[i] = {corners[0], corners[1], corners[2]};
+    });
+    return bvh;
+}
+
+ObjectBvh build_object_bvh(const Mesh& mesh, const BuildSettings& settings) {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
+    WideBvh tree = build_wide_bvh(prims, settings);
+    std::vector<PrimId> leaf_prims(prims.size());
+    for (std::size_t i = 0; i < prims.size(); ++i) leaf_prims[i] = prims[i].id;
+    ObjectBvh bvh = make_object_bvh(mesh, std::move(tree), std::move(leaf_prims));
+    bvh.build_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return bvh;
+}
+
+}  // namespace rebraid

@@ -1,0 +1,82 @@
+// The project's structures against Embree's flat scene on the same rays: closest-hit
+// distance, instance and primitive ids, and occlusion, on shared, default and generated
+// scenes.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+
+#include "embree_glue/embree_reference.h"
+#include "hit_comparison.h"
+#include "rebraid/default_scene.h"
+#include "rebraid/flat_accel.h"
+#include "rebraid/gltf_scene.h"
+#include "rebraid/instanced_accel.h"
+#include "rebraid/random_rays.h"
+#include "test_scenes.h"
+
+namespace rebraid {
+namespace {
+
+using AccelMaker = std::function<std::unique_ptr<Accel>(const Scene&)>;
+
+struct NamedAccel {
+    std::string name;
+    AccelMaker make;
+};
+
+std::vector<NamedAccel> project_accels() {
+    return {
+        {"flat", [](const Scene& s) { return std::make_unique<FlatAccel>(s); }},
+        {"twolevel",
+         [](const Scene& s) { return std::make_unique<InstancedAccel>(build_two_level_accel(s)); }},
+    };
+}
+
+void expect_matches_embree_flat(const Scene& scene, const std::string& scene_name) {
+    const glue::EmbreeFlatAccel reference(scene);
+    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 10000, 42);
+    const test::AccelAnswers expected = test::trace_all(reference, rays);
+    for (const NamedAccel& named : project_accels()) {
+        SCOPED_TRACE(scene_name + " / " + named.name);
+        const std::unique_ptr<Accel> accel = named.make(scene);
+        test::expect_same_answers(expected, test::trace_all(*accel, rays),
+                                  test::tolerance_for(scene.bounds()));
+    }
+}
+
+TEST(AccelEquivalence, DefaultSceneMatchesEmbreeFlat) {
+    expect_matches_embree_flat(make_default_scene(), "default");
+}
+
+TEST(AccelEquivalence, GeneratedScenesMatchEmbreeFlat) {
+    for (const test::NamedScene& named : test::generated_scenes())
+        expect_matches_embree_flat(named.scene, named.name);
+}
+
+class SharedSceneEquivalence : public testing::TestWithParam<std::string> {};
+
+TEST_P(SharedSceneEquivalence, MatchesEmbreeFlat) {
+    const std::string path = std::string(REBRAID_SHARED_SCENES) + "/" + GetParam();
+    expect_matches_embree_flat(load_gltf_scene(path), GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedScenes, SharedSceneEquivalence,
+                         testing::ValuesIn(test::shared_scene_files()),
+                         [](const testing::TestParamInfo<std::string>& info) {
+                             return test::test_name_of(info.param);
+                         });
+
+}  // namespace
+}  // namespace rebraid
+
+namespace rebraid {
+namespace {
+
+TEST(AccelEquivalence, SharedSceneFolderHoldsTheManifestScenes) {
+    EXPECT_GE(test::shared_scene_files().size(), 9u) << "missing " << REBRAID_SHARED_SCENES;
+}
+
+}  // namespace
+}  // namespace rebraid
