@@ -44,7 +44,6 @@ struct BinnedSplit {
     float scale = 0.0f;         ///< bins per unit length along `axis`
     std::uint32_t bin_count = 0;
     float cost = std::numeric_limits<float>::infinity();  ///< A_L W_L + A_R W_R (half areas)
-    RangeInfo left, right;
 
     bool is_valid() const { return axis >= 0; }
     std::uint32_t bin_of(const BuildPrim& prim) const;

@@ -48,19 +48,17 @@ public:
 
     std::array<Candidate, 2> split(const Candidate& c, bool median_only) const {
         std::uint32_t mid;
-        RangeInfo left, right;
         if (c.split.is_valid()) {
             const BinnedSplit& s = c.split;
             mid = c.begin + std::uint32_t(parallel_partition(
                                 range(c), [&](const BuildPrim& p) { return s.goes_left(p); },
                                 settings_.parallel_threshold));
-            left = s.left;
-            right = s.right;
         } else {
             mid = c.begin + c.size() / 2;
-            left = compute_range_info(range(c.begin, mid), settings_.parallel_threshold);
-            right = compute_range_info(range(mid, c.end), settings_.parallel_threshold);
         }
+        // The children's centroid bounds drive their binning: one pass over each side.
+        const RangeInfo left = compute_range_info(range(c.begin, mid), settings_.parallel_threshold);
+        const RangeInfo right = compute_range_info(range(mid, c.end), settings_.parallel_threshold);
         return {evaluate(c.begin, mid, left, median_only),
                 evaluate(mid, c.end, right, median_only)};
     }

@@ -240,8 +240,9 @@ TEST(CliTrace, EmbreeFlatAndInstancedAgreeOnRandomRaysInDefaultScene) {
             EXPECT_TRUE(std::isinf(b.t)) << "ray " << i;
         } else {
             ++hit_count;
-            // Instanced tracing transforms the ray, so t may differ in the last bits.
-            EXPECT_NEAR(a.t, b.t, 1e-5 * std::max(1.0, std::fabs(a.t))) << "ray " << i;
+            // Instanced tracing transforms the ray into object space, so t differs in the
+            // last bits (the printed 9 digits show it); the project's tolerance is 1e-4.
+            EXPECT_NEAR(a.t, b.t, 1e-4 * std::max(1.0, std::fabs(a.t))) << "ray " << i;
         }
     }
     // Random rays in and around the scene must hit something, and not everything.

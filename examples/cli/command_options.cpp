@@ -9,7 +9,7 @@ namespace rebraid::cli {
 
 void add_common_options(CLI::App& command, CommonOptions& common) {
     command.add_option("--threads", common.threads, "worker threads (0 = all cores)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(CLI::Range(0, 4096))
         ->capture_default_str();
 }
 

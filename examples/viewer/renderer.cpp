@@ -31,7 +31,9 @@ struct ShadingContext {
     Vec3f key_light;   ///< unit direction towards the light
 };
 
-Vec3f shade_pixel(const ShadingContext& context, const Ray& primary, Random& random) {
+/// `column_of_row` is scratch space, reused across the pixels of a row to avoid allocations.
+Vec3f shade_pixel(const ShadingContext& context, const Ray& primary, Random& random,
+                  std::vector<int>& column_of_row) {
     const Hit hit = context.accel.intersect(primary);
     if (!hit.is_hit()) return sky_colour(primary.dir, context.world_up);
 
@@ -43,7 +45,7 @@ Vec3f shade_pixel(const ShadingContext& context, const Ray& primary, Random& ran
     // N-rooks (Latin hypercube) samples: each of the n strata of both sample dimensions is
     // hit exactly once, which removes most of the noise of independent samples at low n.
     const int sample_count = context.settings.samples_per_pixel;
-    std::vector<int> column_of_row(static_cast<std::size_t>(sample_count));
+    column_of_row.resize(static_cast<std::size_t>(sample_count));
     std::iota(column_of_row.begin(), column_of_row.end(), 0);
     for (int i = sample_count - 1; i > 0; --i)  // Fisher-Yates with our own generator
         std::swap(column_of_row[i], column_of_row[random.next_below(i + 1)]);
@@ -97,9 +99,13 @@ Image render_ao(const Scene& scene, const Accel& accel, const Camera& camera,
     const Vec3f world_up = normalize(settings.world_up);
     // The light comes from above, over the camera's right shoulder.
     const Vec3f key_light = normalize(world_up * 2.0f + camera.right - camera.forward * 0.5f);
-    const ShadingContext context{
-        scene,    accel,    settings, settings.radius_fraction * scene_size, 1e-4f * scene_size,
-        world_up, key_light};
+    const ShadingContext context{.scene = scene,
+                                 .accel = accel,
+                                 .settings = settings,
+                                 .ao_radius = settings.radius_fraction * scene_size,
+                                 .ray_offset = 1e-4f * scene_size,
+                                 .world_up = world_up,
+                                 .key_light = key_light};
 
     Image image;
     image.width = settings.width;
@@ -108,6 +114,7 @@ Image render_ao(const Scene& scene, const Accel& accel, const Camera& camera,
 
     tbb::parallel_for(
         tbb::blocked_range<int>(0, image.height), [&](const tbb::blocked_range<int>& rows) {
+            std::vector<int> column_of_row;
             for (int y = rows.begin(); y != rows.end(); ++y) {
                 for (int x = 0; x < image.width; ++x) {
                     const std::size_t pixel_id = static_cast<std::size_t>(y) * image.width + x;
@@ -116,7 +123,8 @@ Image render_ao(const Scene& scene, const Accel& accel, const Camera& camera,
                     const Ray primary =
                         camera.ray_through(static_cast<float>(x) + 0.5f,
                                            static_cast<float>(y) + 0.5f, image.width, image.height);
-                    const Vec3f colour = linear_to_srgb(shade_pixel(context, primary, random));
+                    const Vec3f colour =
+                        linear_to_srgb(shade_pixel(context, primary, random, column_of_row));
                     image.rgb[3 * pixel_id + 0] = colour.x;
                     image.rgb[3 * pixel_id + 1] = colour.y;
                     image.rgb[3 * pixel_id + 2] = colour.z;
