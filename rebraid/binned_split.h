@@ -46,11 +46,37 @@ struct BinnedSplit {
     float cost = std::numeric_limits<float>::infinity();  ///< A_L W_L + A_R W_R (half areas)
 
     bool is_valid() const { return axis >= 0; }
-    std::uint32_t bin_of(const BuildPrim& prim) const;
+    /// The bin the binning put `prim` in. Inline and written with exactly the operations of
+    /// the SIMD binning (centre = (min + max) * 0.5, then (centre - origin) * scale clamped
+    /// like max/min instructions do, NaN going to bin 0), so partitions agree with the counts
+    /// the split was chosen by and no side can come out empty.
+    std::uint32_t bin_of(const BuildPrim& prim) const {
+        const float centre = (prim.bounds.min[axis] + prim.bounds.max[axis]) * 0.5f;
+        float position = (centre - origin) * scale;
+        position = position > 0.0f ? position : 0.0f;
+        const float last = float(bin_count - 1);
+        position = position < last ? position : last;
+        return std::uint32_t(position);
+    }
     bool goes_left(const BuildPrim& prim) const { return bin_of(prim) < bin; }
 };
 
 BinnedSplit find_binned_split(std::span<const BuildPrim> prims, const RangeInfo& info,
                               const BuildSettings& settings);
+
+/// How apply_binned_split divided a range: prims [0, left_count) went left.
+struct SplitResult {
+    std::uint32_t left_count = 0;
+    RangeInfo left, right;
+};
+
+/// Moves the prims `split` sends left to the front of `prims` and measures both sides in the
+/// same pass (what compute_range_info would return for each), saving a pass per child.
+/// At or above `parallel_threshold` prims the work runs in parallel blocks through `scratch`
+/// (at least prims.size() elements, contents ignored) and is a stable partition; below, it is
+/// an in-place serial partition. Either way the result depends only on the input and the
+/// threshold, never on the thread count. Precondition: split.is_valid().
+SplitResult apply_binned_split(std::span<BuildPrim> prims, const BinnedSplit& split,
+                               std::span<BuildPrim> scratch, std::size_t parallel_threshold);
 
 }  // namespace rebraid

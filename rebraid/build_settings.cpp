@@ -23,6 +23,9 @@ void BuildSettings::validate() const {
     if (parallel_threshold < 64)
         throw Error("BuildSettings: parallel_threshold " + std::to_string(parallel_threshold) +
                     " must be >= 64");
+    if (task_threshold < 1)
+        throw Error("BuildSettings: task_threshold " + std::to_string(task_threshold) +
+                    " must be >= 1");
 }
 
 }  // namespace rebraid

@@ -20,6 +20,12 @@ struct BuildSettings {
     /// Ranges with fewer primitives are built by one task, serially (binning, partitioning
     /// and recursion); the tree does not depend on this value or the thread count.
     std::size_t parallel_threshold = 8192;
+    /// Subtrees of at least this many primitives are built as their own TBB task; smaller
+    /// ones by their parent's task. Lower than `parallel_threshold` because a task costs far
+    /// less than a parallel loop, and many mid-sized subtrees keep every thread busy. Node
+    /// numbering depends on this value, the tree's shape does not; neither depends on the
+    /// thread count.
+    std::size_t task_threshold = 1024;
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

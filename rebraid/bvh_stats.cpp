@@ -36,17 +36,37 @@ TreeCounts count_tree(std::span<const WideNode> nodes, NodeRef root) {
     return counts;
 }
 
+double mapped_box_half_area(const BBox3f& box, const AffineTransform& object_to_world) {
+    if (box.is_empty()) return 0.0;
+    const Vec3f d = box.extent();
+    const Vec3f a = object_to_world.col_x * d.x;
+    const Vec3f b = object_to_world.col_y * d.y;
+    const Vec3f c = object_to_world.col_z * d.z;
+    return double(length(cross(a, b))) + length(cross(b, c)) + length(cross(c, a));
+}
+
+namespace {
+
+/// Cost of the object subtree at `ref` given the half area of the region whose hit makes the
+/// ray visit it (`entry_area`).
+double object_subtree_cost_from(const ObjectBvh& bvh, NodeRef ref, double entry_area,
+                                const AffineTransform& object_to_world) {
+    if (ref.is_empty()) return 0.0;
+    if (ref.is_leaf()) return entry_area * ref.prim_count();
+    const WideNode& node = bvh.nodes[ref.node_id()];
+    double cost = entry_area;
+    for (int i = 0; i < kBvhWidth && !node.children[i].is_empty(); ++i)
+        cost += object_subtree_cost_from(bvh, node.children[i],
+                                         mapped_box_half_area(node.child_bounds(i), object_to_world),
+                                         object_to_world);
+    return cost;
+}
+
+}  // namespace
+
 double object_subtree_cost(const ObjectBvh& bvh, NodeRef ref, const BBox3f& world_box,
                            const AffineTransform& object_to_world) {
-    if (ref.is_empty()) return 0.0;
-    if (ref.is_leaf()) return double(world_box.half_area()) * ref.prim_count();
-    const WideNode& node = bvh.nodes[ref.node_id()];
-    double cost = world_box.half_area();
-    for (int i = 0; i < kBvhWidth && !node.children[i].is_empty(); ++i)
-        cost += object_subtree_cost(bvh, node.children[i],
-                                    object_to_world.transform_bbox(node.child_bounds(i)),
-                                    object_to_world);
-    return cost;
+    return object_subtree_cost_from(bvh, ref, world_box.half_area(), object_to_world);
 }
 
 double object_bvh_sah(const ObjectBvh& bvh) {

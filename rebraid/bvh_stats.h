@@ -17,10 +17,16 @@ struct TreeCounts {
 
 TreeCounts count_tree(std::span<const WideNode> nodes, NodeRef root);
 
-/// Unnormalised SAH cost of the object subtree at `ref` whose world box is `world_box`:
-/// the half area of every inner node (one per node visit) plus, for leaves, half area times
-/// triangle count; boxes of deeper nodes are their object boxes mapped by `object_to_world`
-/// (conservative AABBs, as traversal of a transformed instance sees them).
+/// Half the surface area of `box` mapped by `object_to_world`: a parallelepiped, exactly the
+/// region a ray tested against `box` in object space must cross. For convex regions the
+/// chance that a random ray crossing one also crosses another inside it is the ratio of their
+/// surface areas, so this is the area the SAH of an instanced object node needs.
+double mapped_box_half_area(const BBox3f& box, const AffineTransform& object_to_world);
+
+/// Unnormalised SAH cost of the object subtree at `ref`, entered when a ray hits `world_box`
+/// (the world-space box a top level or the flat BVH tests before entering it): that box's
+/// half area for the node itself, then for every deeper node the half area of its object box
+/// mapped to world space (mapped_box_half_area), leaves weighted by their triangle count.
 double object_subtree_cost(const ObjectBvh& bvh, NodeRef ref, const BBox3f& world_box,
                            const AffineTransform& object_to_world);
 

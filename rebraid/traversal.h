@@ -1,6 +1,8 @@
 #pragma once
 
+#include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "rebraid/accel.h"
@@ -15,129 +17,203 @@
 namespace rebraid {
 
 /// A ray prepared for box tests: reciprocal direction with zero components replaced by tiny
-/// ones (so no 0 * inf appears) and, per axis, whether the near plane is the lower one.
+/// ones (so no 0 * inf appears) and, per axis, the byte offsets inside a WideNode of the
+/// plane arrays the ray enters (near) and leaves (far) a box through.
 struct TraversalRay {
     Vec3f org;
     Vec3f dir;
     Vec3f rdir;
     float tnear = 0.0f;
     float tfar = 0.0f;
-    int near_is_lower[3] = {1, 1, 1};
+    std::uint32_t near_offset[3] = {};
+    std::uint32_t far_offset[3] = {};
 
     TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far)
         : org(origin), dir(direction), tnear(t_near), tfar(t_far) {
+        constexpr std::uint32_t lower[3] = {offsetof(WideNode, lower_x),
+                                            offsetof(WideNode, lower_y),
+                                            offsetof(WideNode, lower_z)};
+        constexpr std::uint32_t upper[3] = {offsetof(WideNode, upper_x),
+                                            offsetof(WideNode, upper_y),
+                                            offsetof(WideNode, upper_z)};
         for (int a = 0; a < 3; ++a) {
             const float d = direction[a];
             const float safe = std::fabs(d) < 1e-18f ? std::copysign(1e-18f, d) : d;
             rdir[a] = 1.0f / safe;
-            near_is_lower[a] = rdir[a] >= 0.0f;
+            const bool near_is_lower = rdir[a] >= 0.0f;
+            near_offset[a] = near_is_lower ? lower[a] : upper[a];
+            far_offset[a] = near_is_lower ? upper[a] : lower[a];
         }
     }
 };
 
+/// The far distance of a slab test is scaled up by 1 + 2*gamma(3) (Ize 2013) so rounding can
+/// never reject a box the ray touches.
+inline constexpr float kRobustBoxScale = 1.0f + 4.0f * 5.96046448e-08f;
+
+#ifdef REBRAID_SIMD_AVX2
+/// The per-ray values of the box test, broadcast once per traversal rather than per node.
+struct NodeTestRay {
+    __m256 org[3];
+    __m256 rdir[3];
+    std::uint32_t near_offset[3];
+    std::uint32_t far_offset[3];
+
+    explicit NodeTestRay(const TraversalRay& ray) {
+        for (int a = 0; a < 3; ++a) {
+            org[a] = _mm256_set1_ps(ray.org[a]);
+            rdir[a] = _mm256_set1_ps(ray.rdir[a]);
+            near_offset[a] = ray.near_offset[a];
+            far_offset[a] = ray.far_offset[a];
+        }
+    }
+};
+
+/// Entry distances of all children (as a vector) and the mask of those the ray enters within
+/// [tnear, tfar]. (plane - org) * rdir rather than a fused multiply-add: the product of a
+/// far-away origin and rdir would cost the precision the robust bound relies on.
+inline unsigned intersect_node_simd(const WideNode& node, const NodeTestRay& ray, float tnear,
+                                    float tfar, __m256& entry) {
+    const char* base = reinterpret_cast<const char*>(&node);
+    const auto plane = [&](std::uint32_t offset) {
+        return _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
+    };
+    const __m256 near_x = _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[0]), ray.org[0]), ray.rdir[0]);
+    const __m256 near_y = _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[1]), ray.org[1]), ray.rdir[1]);
+    const __m256 near_z = _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[2]), ray.org[2]), ray.rdir[2]);
+    const __m256 far_x = _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[0]), ray.org[0]), ray.rdir[0]);
+    const __m256 far_y = _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[1]), ray.org[1]), ray.rdir[1]);
+    const __m256 far_z = _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[2]), ray.org[2]), ray.rdir[2]);
+    entry = _mm256_max_ps(_mm256_max_ps(near_x, near_y), _mm256_max_ps(near_z, _mm256_set1_ps(tnear)));
+    const __m256 exit = _mm256_min_ps(_mm256_min_ps(far_x, far_y), _mm256_min_ps(far_z, _mm256_set1_ps(tfar)));
+    const __m256 robust_exit = _mm256_mul_ps(exit, _mm256_set1_ps(kRobustBoxScale));
+    return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(entry, robust_exit, _CMP_LE_OQ)));
+}
+#endif
+
 /// Distances to the children's boxes a ray enters before `tfar`; bit i of the result is set
 /// when child i is hit, with its entry distance in `distances[i]`.
-/// The far distance is scaled up by 1 + 2*gamma(3) (Ize 2013) so rounding in the slab test
-/// can never reject a box the ray touches.
 inline unsigned intersect_node(const WideNode& node, const TraversalRay& ray,
                                float distances[kBvhWidth]) {
-    constexpr float kRobustScale = 1.0f + 4.0f * 5.96046448e-08f;
 #ifdef REBRAID_SIMD_AVX2
-    const float* planes[2][3] = {{node.upper_x, node.upper_y, node.upper_z},
-                                 {node.lower_x, node.lower_y, node.lower_z}};
-    __m256 t_enter = _mm256_set1_ps(ray.tnear);
-    __m256 t_exit = _mm256_set1_ps(ray.tfar);
-    for (int a = 0; a < 3; ++a) {
-        const __m256 org = _mm256_set1_ps(ray.org[a]);
-        const __m256 rdir = _mm256_set1_ps(ray.rdir[a]);
-        const __m256 near_plane = _mm256_load_ps(planes[ray.near_is_lower[a]][a]);
-        const __m256 far_plane = _mm256_load_ps(planes[1 - ray.near_is_lower[a]][a]);
-        t_enter = _mm256_max_ps(t_enter, _mm256_mul_ps(_mm256_sub_ps(near_plane, org), rdir));
-        t_exit = _mm256_min_ps(t_exit, _mm256_mul_ps(_mm256_sub_ps(far_plane, org), rdir));
-    }
-    t_exit = _mm256_mul_ps(t_exit, _mm256_set1_ps(kRobustScale));
-    _mm256_storeu_ps(distances, t_enter);
-    return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t_enter, t_exit, _CMP_LE_OQ)));
+    __m256 entry;
+    const unsigned mask = intersect_node_simd(node, NodeTestRay(ray), ray.tnear, ray.tfar, entry);
+    _mm256_storeu_ps(distances, entry);
+    return mask;
 #else
-    const float* lower[3] = {node.lower_x, node.lower_y, node.lower_z};
-    const float* upper[3] = {node.upper_x, node.upper_y, node.upper_z};
+    const char* base = reinterpret_cast<const char*>(&node);
+    const auto plane = [&](std::uint32_t offset, int slot) {
+        return reinterpret_cast<const float*>(base + offset)[slot];
+    };
     unsigned mask = 0;
     for (int i = 0; i < kBvhWidth; ++i) {
         float t_enter = ray.tnear, t_exit = ray.tfar;
         for (int a = 0; a < 3; ++a) {
-            const float near_plane = ray.near_is_lower[a] ? lower[a][i] : upper[a][i];
-            const float far_plane = ray.near_is_lower[a] ? upper[a][i] : lower[a][i];
-            t_enter = std::fmax(t_enter, (near_plane - ray.org[a]) * ray.rdir[a]);
-            t_exit = std::fmin(t_exit, (far_plane - ray.org[a]) * ray.rdir[a]);
+            t_enter = std::fmax(t_enter, (plane(ray.near_offset[a], i) - ray.org[a]) * ray.rdir[a]);
+            t_exit = std::fmin(t_exit, (plane(ray.far_offset[a], i) - ray.org[a]) * ray.rdir[a]);
         }
         distances[i] = t_enter;
-        if (t_enter <= t_exit * kRobustScale) mask |= 1u << i;
+        if (t_enter <= t_exit * kRobustBoxScale) mask |= 1u << i;
     }
     return mask;
 #endif
 }
 
-/// Ordered depth-first traversal of the wide BVH `nodes` from `start` (any node, or a leaf
+/// How traverse_bvh orders the children a ray enters.
+enum class TraversalOrder {
+    /// Nearest child first, farther ones stacked with their entry distance and skipped when a
+    /// hit closer than that distance was found meanwhile: closest-hit queries.
+    nearest_first,
+    /// Children in slot order, no sorting: any-hit queries, where the first hit ends the
+    /// traversal and ordering costs more than it saves.
+    any,
+};
+
+/// Depth-first traversal of the wide BVH `nodes` from `start` (any node, or a leaf
 /// reference). `visit_leaf(NodeRef leaf)` tests a leaf's primitives, shrinking ray.tfar on
-/// hits, and returns true to stop traversal (any-hit queries). Children are visited nearest
-/// first; stacked subtrees farther than the current tfar are skipped. Returns whether
-/// traversal was stopped by visit_leaf.
-template <class LeafVisitor>
+/// hits, and returns true to stop traversal (any-hit queries). Returns whether traversal was
+/// stopped by visit_leaf.
+template <TraversalOrder order = TraversalOrder::nearest_first, class LeafVisitor>
 bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
                   TraversalCounters* counters, LeafVisitor&& visit_leaf) {
-    struct Entry {
-        NodeRef ref;
-        float distance;
-    };
-    // Each wide level pushes at most kBvhWidth - 1 entries.
-    Entry stack[kMaxBvhDepth * (kBvhWidth - 1) + 1];
+    // A stack entry packs a child's entry distance (high half, as float bits) with its
+    // reference (low half); for the non-negative distances of valid rays, comparing entries
+    // as integers compares distances. The array is left uninitialised on purpose: clearing
+    // its ~3.8 KB per ray once cost more than the whole traversal.
+    constexpr int kStackCapacity = kMaxBvhDepth * (kBvhWidth - 1) + 1;
+    std::uint64_t stack[kStackCapacity];
     int stack_size = 0;
+    const auto entry_ref = [](std::uint64_t entry) {
+        return std::bit_cast<NodeRef>(std::uint32_t(entry));
+    };
+    const auto entry_distance = [](std::uint64_t entry) {
+        return std::bit_cast<float>(std::uint32_t(entry >> 32));
+    };
+    const auto make_entry = [](NodeRef ref, float distance) {
+        return (std::uint64_t(std::bit_cast<std::uint32_t>(distance)) << 32) | ref.bits();
+    };
+#ifdef REBRAID_SIMD_AVX2
+    const NodeTestRay node_ray(ray);
+#endif
     NodeRef current = start;
     for (;;) {
         while (current.is_inner()) {
             const WideNode& node = nodes[current.node_id()];
             if (counters) ++counters->nodes_visited;
             alignas(32) float distances[kBvhWidth];
+#ifdef REBRAID_SIMD_AVX2
+            __m256 entry;
+            unsigned mask = intersect_node_simd(node, node_ray, ray.tnear, ray.tfar, entry);
+            _mm256_store_ps(distances, entry);
+#else
             unsigned mask = intersect_node(node, ray, distances);
+#endif
             if (mask == 0) {
                 current = NodeRef::empty();
                 break;
             }
-            int first = __builtin_ctz(mask);
+            const int first = std::countr_zero(mask);
             mask &= mask - 1;
             if (mask == 0) {  // one child hit: descend without touching the stack
                 current = node.children[first];
                 continue;
             }
-            // Several hits: sort them far to near, push all but the nearest.
-            Entry hits[kBvhWidth];
-            int hit_count = 0;
-            hits[hit_count++] = {node.children[first], distances[first]};
-            while (mask) {
-                const int slot = __builtin_ctz(mask);
+            if constexpr (order == TraversalOrder::any) {
+                current = node.children[first];
+                do {
+                    const int slot = std::countr_zero(mask);
+                    mask &= mask - 1;
+                    stack[stack_size++] = make_entry(node.children[slot], distances[slot]);
+                } while (mask);
+                continue;
+            }
+            // Several hits: push them all, sort the pushed run far to near (insertion sort:
+            // runs are short, usually 2-3), then continue with the nearest, popped again.
+            const int run_begin = stack_size;
+            stack[stack_size++] = make_entry(node.children[first], distances[first]);
+            do {
+                const int slot = std::countr_zero(mask);
                 mask &= mask - 1;
-                Entry entry{node.children[slot], distances[slot]};
-                int j = hit_count++;
-                while (j > 0 && hits[j - 1].distance < entry.distance) {
-                    hits[j] = hits[j - 1];
+                const std::uint64_t entry_key = make_entry(node.children[slot], distances[slot]);
+                int j = stack_size++;
+                while (j > run_begin && stack[j - 1] < entry_key) {
+                    stack[j] = stack[j - 1];
                     --j;
                 }
-                hits[j] = entry;
-            }
-            for (int i = 0; i < hit_count - 1; ++i) stack[stack_size++] = hits[i];
-            current = hits[hit_count - 1].ref;
+                stack[j] = entry_key;
+            } while (mask);
+            current = entry_ref(stack[--stack_size]);
         }
         if (current.is_leaf() && visit_leaf(current)) return true;
         // Pop the nearest stacked subtree that may still hold a closer hit.
-        current = NodeRef::empty();
-        while (stack_size > 0) {
-            const Entry& entry = stack[--stack_size];
-            if (entry.distance <= ray.tfar) {
-                current = entry.ref;
+        for (;;) {
+            if (stack_size == 0) return false;
+            const std::uint64_t entry = stack[--stack_size];
+            if (entry_distance(entry) <= ray.tfar) {
+                current = entry_ref(entry);
                 break;
             }
         }
-        if (current.is_empty()) return false;
     }
 }
 

@@ -14,6 +14,7 @@
 #include "rebraid/gltf_scene.h"
 #include "rebraid/instanced_accel.h"
 #include "rebraid/random_rays.h"
+#include "rebraid/rebraid_builder.h"
 #include "test_scenes.h"
 
 namespace rebraid {
@@ -31,6 +32,8 @@ std::vector<NamedAccel> project_accels() {
         {"flat", [](const Scene& s) { return std::make_unique<FlatAccel>(s); }},
         {"twolevel",
          [](const Scene& s) { return std::make_unique<InstancedAccel>(build_two_level_accel(s)); }},
+        {"rebraid",
+         [](const Scene& s) { return std::make_unique<InstancedAccel>(build_rebraid_accel(s)); }},
     };
 }
 

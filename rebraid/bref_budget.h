@@ -1,0 +1,29 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <utility>
+
+#include "rebraid/bref.h"
+#include "rebraid/rebraid_settings.h"
+
+namespace rebraid {
+
+/// Extra BRef slots the build may fill by opening (paper §5.2), under the settings' rule:
+/// budget_factor x instances, or instanced primitives / primitives_per_bref.
+std::uint64_t bref_budget(const RebraidSettings& settings, std::uint64_t instance_count,
+                          std::uint64_t instanced_primitive_count);
+
+/// Paper §5.2: after `parent` was partitioned at `mid`, gives its free space to the two
+/// children in proportion to how many of their BRefs meet the opening criterion
+/// (`left_openable`, `right_openable`; by BRef counts when neither has any), and moves the
+/// right child's BRefs right to make room for the left child's share (in place, not keeping
+/// their order). The split depends only on the counts, never on thread timing, so the tree
+/// is the same for any thread count, and no subtree can ever open more than its share.
+std::pair<BRefSegment, BRefSegment> split_free_space(const BRefSegment& parent,
+                                                     std::uint32_t mid,
+                                                     std::uint32_t left_openable,
+                                                     std::uint32_t right_openable,
+                                                     std::span<BuildPrim> prims);
+
+}  // namespace rebraid

@@ -1,0 +1,120 @@
+#include "rebraid/bref_opening.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <vector>
+
+namespace rebraid {
+namespace {
+
+constexpr std::size_t kBlock = 1024;
+
+/// Children a BRef adds to the array when opened (its first child takes its own slot).
+std::uint32_t extra_children(const BRefTarget& target, const BRefSource& source) {
+    return std::uint32_t(source.bvh_of(target).nodes[target.object_node.node_id()].child_count() - 1);
+}
+
+}  // namespace
+
+OpeningCriterion::OpeningCriterion(const BBox3f& segment_bounds, float open_threshold)
+    : axis(segment_bounds.largest_axis()),
+      min_extent(open_threshold * segment_bounds.extent()[segment_bounds.largest_axis()]) {}
+
+std::uint32_t count_openable(std::span<const BuildPrim> prims,
+                             std::span<const BRefTarget> targets,
+                             const OpeningCriterion& criterion, std::size_t parallel_threshold) {
+    auto count = [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t n) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            n += criterion.wants_to_open(prims[i], targets[prims[i].id]);
+        return n;
+    };
+    if (prims.size() < parallel_threshold) return count({0, prims.size()}, 0);
+    return tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, prims.size(), kBlock), 0u,
+                                count, std::plus<>());
+}
+
+std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
+                         std::span<BRefTarget> targets, const OpeningCriterion& criterion,
+                         const BRefSource& source, std::size_t parallel_threshold) {
+    const std::uint32_t first = segment.start, count = segment.size();
+    const std::uint32_t space = segment.free_space();
+    const std::size_t block_count = (count + kBlock - 1) / kBlock;
+    auto for_each_block = [&](auto&& body) {
+        if (count < parallel_threshold) {
+            for (std::size_t b = 0; b < block_count; ++b) body(b);
+        } else {
+            tbb::parallel_for(std::size_t(0), block_count, body);
+        }
+    };
+    auto block_range = [&](std::size_t b) {
+        return std::pair<std::uint32_t, std::uint32_t>(
+            first + std::uint32_t(b * kBlock),
+            first + std::uint32_t(std::min<std::size_t>(count, (b + 1) * kBlock)));
+    };
+
+    // Pass 1: children wanted per block. Exclusive prefix sums give each block's first
+    // output offset in the free space.
+    std::vector<std::uint64_t> wanted(block_count + 1, 0);
+    for_each_block([&](std::size_t b) {
+        const auto [begin, end] = block_range(b);
+        std::uint64_t sum = 0;
+        for (std::uint32_t i = begin; i < end; ++i) {
+            const BRefTarget& target = targets[prims[i].id];
+            if (criterion.wants_to_open(prims[i], target)) sum += extra_children(target, source);
+        }
+        wanted[b + 1] = sum;
+    });
+    for (std::size_t b = 0; b < block_count; ++b) wanted[b + 1] += wanted[b];
+
+    // Pass 2: open while the inclusive prefix of wanted children fits the free space. Each
+    // block records how far into the free space its last opening reached.
+    std::vector<std::uint32_t> opened_in_block(block_count, 0);
+    std::vector<std::uint64_t> reached(block_count, 0);
+    for_each_block([&](std::size_t b) {
+        const auto [begin, end] = block_range(b);
+        std::uint64_t offset = wanted[b];
+        for (std::uint32_t i = begin; i < end && offset <= space; ++i) {
+            BuildPrim& parent = prims[i];
+            const BRefTarget parent_target = targets[parent.id];
+            if (!criterion.wants_to_open(parent, parent_target)) continue;
+            const std::uint32_t extra = extra_children(parent_target, source);
+            if (offset + extra > space) break;  // this and every later BRef stay closed
+            const WideNode& node = source.bvh_of(parent_target).nodes[parent_target.object_node.node_id()];
+            const AffineTransform& to_world = source.object_to_world[parent_target.instance_id];
+            const std::uint32_t child_weight = std::max(1u, parent.weight / (extra + 1));
+            for (std::uint32_t c = 0; c <= extra; ++c) {
+                const BBox3f bounds = to_world.transform_bbox(node.child_bounds(int(c)));
+                const BRefTarget child_target{parent_target.instance_id, node.children[c]};
+                if (c == 0) {  // the first child replaces its parent, keeping its target slot
+                    parent = {bounds, parent.id, child_weight};
+                    targets[parent.id] = child_target;
+                } else {
+                    const auto slot = std::uint32_t(offset + c - 1);
+                    const std::uint32_t target_slot = segment.next_target + slot;
+                    prims[segment.end + slot] = {bounds, target_slot, child_weight};
+                    targets[target_slot] = child_target;
+                }
+            }
+            offset += extra;
+            reached[b] = offset;
+            ++opened_in_block[b];
+        }
+    });
+
+    // The opened BRefs are a prefix of the wanting ones, so their children fill the free
+    // space contiguously up to the farthest point any block reached.
+    std::uint64_t used = 0;
+    std::uint32_t opened = 0;
+    for (std::size_t b = 0; b < block_count; ++b) {
+        opened += opened_in_block[b];
+        used = std::max(used, reached[b]);
+    }
+    segment.end += std::uint32_t(used);
+    segment.next_target += std::uint32_t(used);
+    return opened;
+}
+
+}  // namespace rebraid

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <cstdint>
+
+#include "rebraid/build_settings.h"
+
+namespace rebraid {
+
+/// How the extra BRef space (the opening budget) is sized (paper §5.2).
+enum class BudgetRule {
+    /// budget = budget_factor x instances: the paper's rule for trees over instances.
+    per_instance,
+    /// budget = instanced primitives / primitives_per_bref: the paper's rule for trees over
+    /// objects built in world space.
+    per_primitive,
+};
+
+/// Parameters of the re-braiding top-level builder (Benthin et al. 2017). Defaults are the
+/// paper's values and the ones bench/RESULTS.md uses.
+struct RebraidSettings {
+    /// A BRef is opened when its extent along the segment's largest axis exceeds this
+    /// fraction of the segment's extent (paper §4.2: 10%). 0 opens every inner-node BRef
+    /// (within the budget); 1 or more opens nothing.
+    float open_threshold = 0.10f;
+    /// Which rule sizes the budget.
+    BudgetRule budget_rule = BudgetRule::per_instance;
+    /// Extra BRefs per instance under BudgetRule::per_instance (paper §5.2: 4). 0 gives the
+    /// plain two-level top.
+    float budget_factor = 4.0f;
+    /// Instanced primitives per extra BRef under BudgetRule::per_primitive (paper: 1000).
+    float primitives_per_bref = 1000.0f;
+    /// Segments with at most this many BRefs stop opening when their boxes overlap little
+    /// (paper §4.4: 4).
+    std::uint32_t small_segment_brefs = 4;
+    /// "Little" overlap for that test: every pairwise intersection of the segment's BRef
+    /// boxes has at most this fraction of the surface area of the smaller box.
+    float small_overlap_fraction = 0.1f;
+    /// Binning, SAH costs and the serial threshold of the top-level build (leaves hold one
+    /// BRef: max_leaf_size is 1).
+    BuildSettings build{.max_leaf_size = 1};
+
+    /// Throws rebraid::Error naming the field and value when a setting is out of range.
+    void validate() const;
+};
+
+}  // namespace rebraid

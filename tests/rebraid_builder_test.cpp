@@ -1,0 +1,164 @@
+#include "rebraid/rebraid_builder.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include "embree_glue/embree_reference.h"
+#include "hit_comparison.h"
+#include "reachability.h"
+#include "rebraid/default_scene.h"
+#include "rebraid/error.h"
+#include "rebraid/gltf_scene.h"
+#include "rebraid/random_rays.h"
+#include "rebraid/two_level_builder.h"
+#include "test_scenes.h"
+
+namespace rebraid {
+namespace {
+
+struct NamedSettings {
+    std::string name;
+    RebraidSettings settings;
+};
+
+/// The paper's defaults, plain two-level (no budget), open everything (huge budget, no
+/// threshold), and the per-primitive budget rule.
+std::vector<NamedSettings> settings_variants() {
+    return {
+        {"paper", {}},
+        {"no-budget", {.budget_factor = 0.0f}},
+        {"open-everything", {.open_threshold = 0.0f, .budget_factor = 1000.0f}},
+        {"threshold-0.5", {.open_threshold = 0.5f, .budget_factor = 2.0f}},
+        {"per-primitive", {.budget_rule = BudgetRule::per_primitive,
+                           .primitives_per_bref = 100.0f}},
+    };
+}
+
+std::vector<test::NamedScene> rebraid_scenes() {
+    std::vector<test::NamedScene> scenes = test::generated_scenes();
+    scenes.push_back({"default", make_default_scene()});
+    return scenes;
+}
+
+TEST(RebraidBuilder, MatchesEmbreeFlatAtSeveralSettings) {
+    for (const test::NamedScene& named : rebraid_scenes()) {
+        const glue::EmbreeFlatAccel reference(named.scene);
+        const std::vector<Ray> rays = generate_random_rays(named.scene.bounds(), 10000, 7);
+        const test::AccelAnswers expected = test::trace_all(reference, rays);
+        const std::vector<ObjectBvh> bvhs = build_object_bvhs(named.scene, own_object_bvh_builder());
+        for (const NamedSettings& variant : settings_variants()) {
+            SCOPED_TRACE(named.name + " / " + variant.name);
+            RebraidBuild build = build_rebraid(named.scene, bvhs, variant.settings);
+            const InstancedAccel accel(named.scene, bvhs, std::move(build.top), {});
+            test::expect_same_answers(expected, test::trace_all(accel, rays),
+                                      test::tolerance_for(named.scene.bounds()));
+        }
+    }
+}
+
+TEST(RebraidBuilder, EveryTriangleReachableOnceAndBudgetKept) {
+    for (const test::NamedScene& named : rebraid_scenes()) {
+        const std::vector<ObjectBvh> bvhs = build_object_bvhs(named.scene, own_object_bvh_builder());
+        for (const NamedSettings& variant : settings_variants()) {
+            SCOPED_TRACE(named.name + " / " + variant.name);
+            RebraidBuild build = build_rebraid(named.scene, bvhs, variant.settings);
+            const std::uint64_t instances = named.scene.instances.size();
+            EXPECT_LE(build.brefs, instances + build.budget);
+            EXPECT_EQ(build.top.items.size(), build.brefs);
+            if (variant.settings.budget_factor == 0.0f &&
+                variant.settings.budget_rule == BudgetRule::per_instance) {
+                EXPECT_EQ(build.budget, 0u);
+                EXPECT_EQ(build.opened, 0u);
+                EXPECT_EQ(build.brefs, instances);
+            }
+            const InstancedAccel accel(named.scene, bvhs, std::move(build.top), {});
+            test::expect_each_reached_once(test::reach_counts(named.scene, accel));
+        }
+    }
+}
+
+TEST(RebraidBuilder, OpensWhereInstancesOverlap) {
+    const Scene scene = test::make_overlap_scene(200, 3);
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    const RebraidBuild build = build_rebraid(scene, bvhs, {});
+    EXPECT_GT(build.opened, 0u);
+    EXPECT_GT(build.brefs, scene.instances.size());
+    EXPECT_EQ(build.budget, 4u * scene.instances.size());
+}
+
+TEST(RebraidBuilder, NoBudgetGivesThePlainTwoLevelTop) {
+    const Scene scene = make_default_scene();
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    RebraidBuild rebraided = build_rebraid(scene, bvhs, {.budget_factor = 0.0f});
+    TopLevelBvh plain = build_two_level(scene, bvhs);
+    const InstancedAccel a(scene, bvhs, std::move(rebraided.top), {});
+    const InstancedAccel b(scene, bvhs, std::move(plain), {});
+    EXPECT_EQ(a.stats().structure_hash, b.stats().structure_hash);
+}
+
+TEST(RebraidBuilder, SingleLeafObjectsAndEmptyMeshes) {
+    Scene scene;
+    Mesh single;
+    single.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    single.triangles = {{0, 1, 2}};
+    scene.meshes.push_back(single);
+    scene.meshes.push_back(Mesh{});  // empty: its instances are left out
+    for (int i = 0; i < 50; ++i)
+        scene.instances.push_back(
+            {MeshId(i % 2), AffineTransform::translate({0.01f * float(i), 0.0f, 0.0f})});
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    const RebraidBuild build = build_rebraid(scene, bvhs, {.open_threshold = 0.0f});
+    EXPECT_EQ(build.opened, 0u);  // leaves cannot be opened
+    EXPECT_EQ(build.brefs, 25u);
+    const InstancedAccel accel(scene, bvhs, RebraidBuild(build).top, {});
+    test::expect_each_reached_once(test::reach_counts(scene, accel));
+    const Hit hit = accel.intersect({{0.2f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}});
+    EXPECT_TRUE(hit.is_hit());
+    EXPECT_FLOAT_EQ(hit.t, 1.0f);
+}
+
+TEST(RebraidBuilder, EmptySceneHasNoItems) {
+    const Scene scene;
+    const RebraidBuild build = build_rebraid(scene, {}, {});
+    EXPECT_TRUE(build.top.root.is_empty());
+    EXPECT_EQ(build.brefs, 0u);
+    const InstancedAccel accel(scene, {}, RebraidBuild(build).top, {});
+    EXPECT_FALSE(accel.intersect({{0, 0, 0}, 0.0f, {1, 0, 0}}).is_hit());
+}
+
+std::uint64_t rebraid_hash(const Scene& scene, const RebraidSettings& settings, int threads) {
+    std::uint64_t hash = 0;
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        const InstancedAccel accel = build_rebraid_accel(scene, own_object_bvh_builder({.parallel_threshold = 256}), settings);
+        hash = *accel.stats().structure_hash;
+    });
+    return hash;
+}
+
+TEST(RebraidBuilder, SameStructureOnOneTwoAndEightThreads) {
+    tbb::global_control allow_eight(tbb::global_control::max_allowed_parallelism, 8);
+    std::vector<test::NamedScene> scenes = rebraid_scenes();
+    for (const std::string& file : test::shared_scene_files())
+        scenes.push_back({file, load_gltf_scene(std::string(REBRAID_SHARED_SCENES) + "/" + file)});
+    // A small threshold makes the parallel opening, binning and partitioning paths run.
+    RebraidSettings settings;
+    settings.build.parallel_threshold = 64;
+    for (const test::NamedScene& named : scenes) {
+        SCOPED_TRACE(named.name);
+        const std::uint64_t one = rebraid_hash(named.scene, settings, 1);
+        EXPECT_EQ(one, rebraid_hash(named.scene, settings, 2));
+        EXPECT_EQ(one, rebraid_hash(named.scene, settings, 8));
+    }
+}
+
+TEST(RebraidSettings, RejectsOutOfRangeValues) {
+    EXPECT_THROW((RebraidSettings{.open_threshold = -0.1f}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.budget_factor = -1.0f}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.primitives_per_bref = 0.0f}.validate()), Error);
+    EXPECT_NO_THROW(RebraidSettings{}.validate());
+}
+
+}  // namespace
+}  // namespace rebraid
