@@ -10,88 +10,28 @@
 #include <limits>
 #include <vector>
 
+#include "rebraid/build_box.h"
 #include "rebraid/parallel_partition.h"
-
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
 
 namespace rebraid {
 namespace {
 
 constexpr std::uint32_t kMaxBins = 256;
-constexpr float kInf = std::numeric_limits<float>::infinity();
-
-// Box4::of reads a BuildPrim's six bound floats with two 4-float loads.
-static_assert(sizeof(BuildPrim) == 32 && offsetof(BuildPrim, bounds) == 0 &&
-              sizeof(BBox3f) == 6 * sizeof(float));
-
-/// A box as two 4-float vectors (lane 3 unused), so the hot loops below extend boxes with
-/// two vector instructions.
-struct Box4 {
-#if defined(__SSE2__)
-    // No member initialisers: bins are arrays of these, initialised only as far as used.
-    __m128 lower, upper;
-
-    static Box4 empty() { return {_mm_set1_ps(kInf), _mm_set1_ps(-kInf)}; }
-
-    /// Loads {min.x, min.y, min.z, max.x} and {min.z, max.x, max.y, max.z} rotated to
-    /// {max.x, max.y, max.z, min.z}: lane 3 then holds coordinates, never the id or weight,
-    /// whose bit patterns are denormal floats that could slow the arithmetic below.
-    static Box4 of(const BuildPrim& prim) {
-        const float* p = &prim.bounds.min.x;
-        const __m128 tail = _mm_loadu_ps(p + 2);
-        return {_mm_loadu_ps(p), _mm_shuffle_ps(tail, tail, _MM_SHUFFLE(0, 3, 2, 1))};
-    }
-    void extend(const Box4& b) {
-        lower = _mm_min_ps(lower, b.lower);
-        upper = _mm_max_ps(upper, b.upper);
-    }
-    __m128 centre() const { return _mm_mul_ps(_mm_add_ps(lower, upper), _mm_set1_ps(0.5f)); }
-    void extend_point(__m128 point) {
-        lower = _mm_min_ps(lower, point);
-        upper = _mm_max_ps(upper, point);
-    }
-    /// Same operations, in the same order, as BBox3f::half_area (for a non-empty box).
-    float half_area() const {
-        const __m128 d = _mm_sub_ps(upper, lower);
-        const __m128 d_yzx = _mm_shuffle_ps(d, d, _MM_SHUFFLE(3, 0, 2, 1));
-        const __m128 products = _mm_mul_ps(d, d_yzx);  // xy, yz, zx
-        const __m128 sum = _mm_add_ss(products, _mm_shuffle_ps(products, products, 1));
-        return _mm_cvtss_f32(_mm_add_ss(sum, _mm_movehl_ps(products, products)));
-    }
-    BBox3f to_bbox() const {
-        alignas(16) float lo[4], hi[4];
-        _mm_store_ps(lo, lower);
-        _mm_store_ps(hi, upper);
-        return {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
-    }
-#else
-    BBox3f box;
-
-    static Box4 empty() { return {}; }
-    static Box4 of(const BuildPrim& prim) { return {prim.bounds}; }
-    void extend(const Box4& b) { box.extend(b.box); }
-    Vec3f centre() const { return box.center(); }
-    void extend_point(Vec3f point) { box.extend(point); }
-    float half_area() const { return box.half_area(); }
-    BBox3f to_bbox() const { return box; }
-#endif
-};
 
 /// Maps centroids to bins on all three axes at once, with the operations of
 /// BinnedSplit::bin_of (see there), so binning and partitioning always agree.
 struct BinMapping {
-#if defined(__SSE2__)
-    __m128 origin, scale, last_bin;
+#if defined(__AVX__)
+    __m128 twice_origin, half_scale, last_bin;
 
-    BinMapping(Vec3f origin3, Vec3f scale3, std::uint32_t bin_count)
-        : origin(_mm_setr_ps(origin3.x, origin3.y, origin3.z, 0.0f)),
-          scale(_mm_setr_ps(scale3.x, scale3.y, scale3.z, 0.0f)),
+    BinMapping(Vec3f origin, Vec3f scale, std::uint32_t bin_count)
+        : twice_origin(_mm_setr_ps(origin.x + origin.x, origin.y + origin.y, origin.z + origin.z,
+                                   0.0f)),
+          half_scale(_mm_setr_ps(scale.x * 0.5f, scale.y * 0.5f, scale.z * 0.5f, 0.0f)),
           last_bin(_mm_set1_ps(float(bin_count - 1))) {}
 
-    void bins_of(const Box4& box, std::int32_t out[4]) const {
-        __m128 position = _mm_mul_ps(_mm_sub_ps(box.centre(), origin), scale);
+    void bins_of(const BuildBox& box, std::int32_t out[4]) const {
+        __m128 position = _mm_mul_ps(_mm_sub_ps(box.twice_centre(), twice_origin), half_scale);
         // max(p, 0) then min(p, last): the operand order of bin_of's comparisons.
         position = _mm_min_ps(_mm_max_ps(position, _mm_setzero_ps()), last_bin);
         _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(position));
@@ -103,10 +43,10 @@ struct BinMapping {
     BinMapping(Vec3f origin3, Vec3f scale3, std::uint32_t bin_count)
         : origin(origin3), scale(scale3), last_bin(float(bin_count - 1)) {}
 
-    void bins_of(const Box4& box, std::int32_t out[4]) const {
-        const Vec3f c = box.centre();
+    void bins_of(const BuildBox& box, std::int32_t out[4]) const {
+        const Vec3f c2 = box.twice_centre();
         for (int a = 0; a < 3; ++a) {
-            float position = (c[a] - origin[a]) * scale[a];
+            float position = (c2[a] - (origin[a] + origin[a])) * (scale[a] * 0.5f);
             position = position > 0.0f ? position : 0.0f;
             position = position < last_bin ? position : last_bin;
             out[a] = std::int32_t(position);
@@ -115,10 +55,11 @@ struct BinMapping {
 #endif
 };
 
+/// No prim count: a bin is empty exactly when its box is, and one store fewer per update
+/// counts (binning is bound by stores).
 struct Bin {
-    Box4 bounds;
+    BuildBox bounds;
     std::uint64_t weight;
-    std::uint32_t count;
 };
 
 /// Per-axis bins of one range (or one block of it), stored axis after axis with a stride of
@@ -128,63 +69,45 @@ public:
     BinView(Bin* storage, std::uint32_t bin_count) : bins_(storage), bin_count_(bin_count) {}
 
     void clear() {
-        for (std::uint32_t i = 0; i < 3 * bin_count_; ++i) bins_[i] = {Box4::empty(), 0, 0};
+        for (std::uint32_t i = 0; i < 3 * bin_count_; ++i) bins_[i] = {BuildBox::empty(), 0};
     }
     Bin* axis(int a) const { return bins_ + std::size_t(a) * bin_count_; }
 
-    void add(std::span<const BuildPrim> prims, const BinMapping& mapping) {
-        Bin* x = axis(0);
-        Bin* y = axis(1);
-        Bin* z = axis(2);
-        for (const BuildPrim& prim : prims) {
-            const Box4 box = Box4::of(prim);
-            std::int32_t index[4];
-            mapping.bins_of(box, index);
-            add_to(x[index[0]], box, prim.weight);
-            add_to(y[index[1]], box, prim.weight);
-            add_to(z[index[2]], box, prim.weight);
+    void add(const BuildPrim& prim, const BinMapping& mapping) {
+        const BuildBox box = BuildBox::of(prim);
+        std::int32_t index[4];
+        mapping.bins_of(box, index);
+        for (int a = 0; a < 3; ++a) {
+            Bin& bin = bins_[std::size_t(a) * bin_count_ + std::uint32_t(index[a])];
+            bin.bounds.extend(box);
+            bin.weight += prim.weight;
         }
+    }
+    void add(std::span<const BuildPrim> prims, const BinMapping& mapping) {
+        for (const BuildPrim& prim : prims) add(prim, mapping);
+    }
+    /// Adds even-numbered prims here and odd ones to `other`. Neighbouring prims tend to
+    /// fall into the same bins, and each bin update must wait for the previous one to reach
+    /// memory; alternating two sets of bins halves those chains.
+    void add_alternating(std::span<const BuildPrim> prims, const BinMapping& mapping,
+                         BinView& other) {
+        std::size_t i = 0;
+        for (; i + 1 < prims.size(); i += 2) {
+            add(prims[i], mapping);
+            other.add(prims[i + 1], mapping);
+        }
+        if (i < prims.size()) add(prims[i], mapping);
     }
     void merge(const BinView& other) {
         for (std::uint32_t i = 0; i < 3 * bin_count_; ++i) {
             bins_[i].bounds.extend(other.bins_[i].bounds);
             bins_[i].weight += other.bins_[i].weight;
-            bins_[i].count += other.bins_[i].count;
         }
     }
 
 private:
-    static void add_to(Bin& bin, const Box4& box, std::uint32_t weight) {
-        bin.bounds.extend(box);
-        bin.weight += weight;
-        ++bin.count;
-    }
-
     Bin* bins_;
     std::uint32_t bin_count_;
-};
-
-/// RangeInfo accumulated with Box4 arithmetic; also the per-side summary of
-/// apply_binned_split's partition.
-struct RangeAccumulator {
-    Box4 bounds = Box4::empty(), centroids = Box4::empty();
-    std::uint64_t weight = 0;
-    std::uint32_t count = 0;
-
-    void add(const BuildPrim& prim) {
-        const Box4 box = Box4::of(prim);
-        bounds.extend(box);
-        centroids.extend_point(box.centre());
-        weight += prim.weight;
-        ++count;
-    }
-    void merge(const RangeAccumulator& other) {
-        bounds.extend(other.bounds);
-        centroids.extend(other.centroids);
-        weight += other.weight;
-        count += other.count;
-    }
-    RangeInfo to_info() const { return {bounds.to_bbox(), centroids.to_bbox(), weight, count}; }
 };
 
 /// Prims per block of the parallel loops (fixed, so blocks never depend on thread count).
@@ -193,12 +116,60 @@ constexpr std::size_t kBlock = 4096;
 /// there are at most this many sets of bins to clear and merge.
 constexpr std::size_t kMaxBinBlocks = 32;
 
+/// Bins for the default bin count live on the stack; only larger counts allocate.
+constexpr std::uint32_t kStackBins = 32;
+/// Ranges of at least this many prims bin alternately into two sets of bins.
+constexpr std::size_t kAlternateBinsMin = 128;
+
+/// Storage for one set of bins: on the stack for up to kStackBins bins per axis.
+class BinStorage {
+public:
+    explicit BinStorage(std::uint32_t bin_count) : bin_count_(bin_count) {
+        if (bin_count > kStackBins) heap_.resize(3 * std::size_t(bin_count));
+    }
+    BinView view() { return {heap_.empty() ? stack_.data() : heap_.data(), bin_count_}; }
+
+private:
+    std::array<Bin, 3 * kStackBins> stack_;
+    std::vector<Bin> heap_;
+    std::uint32_t bin_count_;
+};
+
+/// Adds `prims` to `bins` (already cleared), serially.
+void bin_serially(std::span<const BuildPrim> prims, const BinMapping& mapping, BinView bins,
+                  std::uint32_t bin_count) {
+    if (prims.size() < kAlternateBinsMin) {
+        bins.add(prims, mapping);
+        return;
+    }
+    if (prims.size() >= 1024) {
+        BinStorage s1(bin_count), s2(bin_count), s3(bin_count);
+        BinView b1 = s1.view(), b2 = s2.view(), b3 = s3.view();
+        b1.clear(); b2.clear(); b3.clear();
+        std::size_t i = 0;
+        for (; i + 3 < prims.size(); i += 4) {
+            bins.add(prims[i], mapping);
+            b1.add(prims[i + 1], mapping);
+            b2.add(prims[i + 2], mapping);
+            b3.add(prims[i + 3], mapping);
+        }
+        for (; i < prims.size(); ++i) bins.add(prims[i], mapping);
+        bins.merge(b1); bins.merge(b2); bins.merge(b3);
+        return;
+    }
+    BinStorage odd_storage(bin_count);
+    BinView odd = odd_storage.view();
+    odd.clear();
+    bins.add_alternating(prims, mapping, odd);
+    bins.merge(odd);
+}
+
 /// Fills `bins` (already cleared) with `prims`; in parallel blocks at or above `threshold`.
 /// Min/max and integer sums are exact, so the result does not depend on the blocks.
 void fill_bins(std::span<const BuildPrim> prims, const BinMapping& mapping, BinView bins,
                std::uint32_t bin_count, std::size_t threshold) {
     if (prims.size() < threshold) {
-        bins.add(prims, mapping);
+        bin_serially(prims, mapping, bins, bin_count);
         return;
     }
     const std::size_t block_count =
@@ -210,10 +181,86 @@ void fill_bins(std::span<const BuildPrim> prims, const BinMapping& mapping, BinV
         block_bins.clear();
         const std::size_t begin = b * block_size;
         const std::size_t end = std::min(prims.size(), begin + block_size);
-        block_bins.add(prims.subspan(begin, end - begin), mapping);
+        bin_serially(prims.subspan(begin, end - begin), mapping, block_bins, bin_count);
     });
     for (std::size_t b = 0; b < block_count; ++b)
         bins.merge(BinView(storage.data() + b * 3 * bin_count, bin_count));
+}
+
+/// Sweeps each axis's bins: right-to-left suffix costs, then left to right. Ties keep the
+/// first (lowest axis, lowest bin) candidate, so the choice is reproducible. A side whose
+/// box is empty holds no prim, and such cuts are skipped.
+BinnedSplit sweep_bins(const BinView& bins, std::uint32_t bin_count, Vec3f scale) {
+    constexpr float kNoPrims = -1.0f;  // right_cost of an empty suffix (real costs are >= 0)
+    std::array<float, kMaxBins> right_cost;
+    // The best cut in locals rather than in the returned struct, which lives in memory.
+    float best_cost = std::numeric_limits<float>::infinity();
+    int best_axis = -1;
+    std::uint32_t best_bin = 0;
+    for (int a = 0; a < 3; ++a) {
+        if (!(scale[a] > 0.0f)) continue;
+        const Bin* axis_bins = bins.axis(a);
+        BuildBox right = BuildBox::empty();
+        std::uint64_t weight = 0;
+        for (std::uint32_t b = bin_count - 1; b > 0; --b) {
+            right.extend(axis_bins[b].bounds);
+            weight += axis_bins[b].weight;
+            right_cost[b] =
+                right.is_empty() ? kNoPrims : right.half_area() * weight_as_float(weight);
+        }
+        BuildBox left = BuildBox::empty();
+        weight = 0;
+        for (std::uint32_t b = 1; b < bin_count; ++b) {
+            left.extend(axis_bins[b - 1].bounds);
+            weight += axis_bins[b - 1].weight;
+            if (right_cost[b] == kNoPrims || left.is_empty()) continue;
+            const float cost = left.half_area() * weight_as_float(weight) + right_cost[b];
+            if (cost < best_cost) {
+                best_cost = cost;
+                best_axis = a;
+                best_bin = b;
+            }
+        }
+    }
+    BinnedSplit best;
+    best.axis = best_axis;
+    best.bin = best_bin;
+    best.cost = best_cost;
+    return best;
+}
+
+/// BinnedSplit::goes_left for a fixed axis, simplified without changing any result:
+/// uint(clamp(p, 0, last)) < bin, for 1 <= bin <= last, holds exactly when !(p >= bin)
+/// (NaN included, which bin_of sends to bin 0). Same position arithmetic as bin_of.
+template <int kAxis>
+struct GoesLeft {
+    float twice_origin, half_scale, bin;
+
+    bool operator()(const BuildPrim& prim) const {
+        const float twice_centre = prim.bounds.min[kAxis] + prim.bounds.max[kAxis];
+        return !((twice_centre - twice_origin) * half_scale >= bin);
+    }
+};
+
+SplitResult to_split_result(const PartitionResult<RangeAccumulator>& partition) {
+    return {std::uint32_t(partition.left_count), partition.left.to_info(),
+            partition.right.to_info()};
+}
+
+/// Calls partition(goes_left) with the predicate instantiated for split's axis, so the hot
+/// loop reads its coordinate directly.
+template <class Partition>
+SplitResult with_axis_predicate(const BinnedSplit& split, Partition partition) {
+    const float twice_origin = split.origin + split.origin, half_scale = split.scale * 0.5f;
+    const float bin = float(split.bin);
+    switch (split.axis) {
+        case 0:
+            return to_split_result(partition(GoesLeft<0>{twice_origin, half_scale, bin}));
+        case 1:
+            return to_split_result(partition(GoesLeft<1>{twice_origin, half_scale, bin}));
+        default:
+            return to_split_result(partition(GoesLeft<2>{twice_origin, half_scale, bin}));
+    }
 }
 
 }  // namespace
@@ -238,9 +285,9 @@ RangeInfo compute_range_info(std::span<const BuildPrim> prims, std::size_t paral
 
 BinnedSplit find_binned_split(std::span<const BuildPrim> prims, const RangeInfo& info,
                               const BuildSettings& settings) {
-    // Small ranges need no more bins than prims (fewer bins to clear and sweep).
-    const std::uint32_t bin_count =
-        std::min({settings.bin_count, kMaxBins, std::max(info.count, 4u)});
+    // Small ranges get fewer bins: clearing and sweeping them dominates their cost.
+    const std::uint32_t bin_count = std::min(
+        {settings.bin_count, kMaxBins, std::max(info.count / settings.prims_per_bin, 4u)});
     const Vec3f extent = info.centroid_bounds.extent();
     // Bins slightly narrower than extent / bin_count so the largest centroid lands in the
     // last bin rather than one past it. Axes without extent get scale 0: all in bin 0.
@@ -249,47 +296,13 @@ BinnedSplit find_binned_split(std::span<const BuildPrim> prims, const RangeInfo&
         scale[a] = extent[a] > 0.0f ? (float(bin_count) * 0.99999f) / extent[a] : 0.0f;
     const Vec3f origin = info.centroid_bounds.min;
 
-    std::array<Bin, 3 * kMaxBins> storage;  // only the first 3 * bin_count are used
-    BinView bins(storage.data(), bin_count);
+    BinStorage storage(bin_count);
+    BinView bins = storage.view();
     bins.clear();
     fill_bins(prims, BinMapping(origin, scale, bin_count), bins, bin_count,
               settings.parallel_threshold);
 
-    // Sweep each axis: right-to-left suffix costs, then left to right. Ties keep the first
-    // (lowest axis, lowest bin) candidate, so the choice is reproducible.
-    BinnedSplit best;
-    std::array<float, kMaxBins> right_cost;
-    std::array<std::uint32_t, kMaxBins> right_count;
-    for (int a = 0; a < 3; ++a) {
-        if (scale[a] <= 0.0f) continue;
-        const Bin* axis_bins = bins.axis(a);
-        Box4 right = Box4::empty();
-        std::uint64_t weight = 0;
-        std::uint32_t count = 0;
-        for (std::uint32_t b = bin_count - 1; b > 0; --b) {
-            right.extend(axis_bins[b].bounds);
-            weight += axis_bins[b].weight;
-            count += axis_bins[b].count;
-            // Empty suffixes (count 0) have an undefined area; they are skipped below.
-            right_cost[b] = count > 0 ? right.half_area() * float(weight) : 0.0f;
-            right_count[b] = count;
-        }
-        Box4 left = Box4::empty();
-        weight = 0;
-        count = 0;
-        for (std::uint32_t b = 1; b < bin_count; ++b) {
-            left.extend(axis_bins[b - 1].bounds);
-            weight += axis_bins[b - 1].weight;
-            count += axis_bins[b - 1].count;
-            if (count == 0 || right_count[b] == 0) continue;
-            const float cost = left.half_area() * float(weight) + right_cost[b];
-            if (cost < best.cost) {
-                best.axis = a;
-                best.bin = b;
-                best.cost = cost;
-            }
-        }
-    }
+    BinnedSplit best = sweep_bins(bins, bin_count, scale);
     if (best.is_valid()) {
         best.origin = origin[best.axis];
         best.scale = scale[best.axis];
@@ -300,11 +313,18 @@ BinnedSplit find_binned_split(std::span<const BuildPrim> prims, const RangeInfo&
 
 SplitResult apply_binned_split(std::span<BuildPrim> prims, const BinnedSplit& split,
                                std::span<BuildPrim> scratch, std::size_t parallel_threshold) {
-    const auto partition = partition_summarized<RangeAccumulator>(
-        prims, [&split](const BuildPrim& prim) { return split.goes_left(prim); },
-        parallel_threshold, scratch);
-    return {std::uint32_t(partition.left_count), partition.left.to_info(),
-            partition.right.to_info()};
+    return with_axis_predicate(split, [&](auto goes_left) {
+        return partition_summarized<RangeAccumulator>(prims, goes_left, parallel_threshold,
+                                                      scratch);
+    });
+}
+
+SplitResult apply_binned_split_into(std::span<const BuildPrim> prims, std::span<BuildPrim> out,
+                                    const BinnedSplit& split, std::size_t parallel_threshold) {
+    return with_axis_predicate(split, [&](auto goes_left) {
+        return partition_summarized_into<RangeAccumulator>(prims, out, goes_left,
+                                                           parallel_threshold);
+    });
 }
 
 }  // namespace rebraid

@@ -46,13 +46,14 @@ struct BinnedSplit {
     float cost = std::numeric_limits<float>::infinity();  ///< A_L W_L + A_R W_R (half areas)
 
     bool is_valid() const { return axis >= 0; }
-    /// The bin the binning put `prim` in. Inline and written with exactly the operations of
-    /// the SIMD binning (centre = (min + max) * 0.5, then (centre - origin) * scale clamped
-    /// like max/min instructions do, NaN going to bin 0), so partitions agree with the counts
-    /// the split was chosen by and no side can come out empty.
+    /// The bin the binning put `prim` in. Inline, and computed with exactly the operations of
+    /// the SIMD binning, so partitions agree with the counts the split was chosen by and no
+    /// side comes out empty: ((min + max) - 2 origin) * (scale / 2), clamped the way max/min
+    /// instructions clamp (NaN goes to bin 0). No product feeds a sum, so a compiler that
+    /// fuses multiply-adds cannot round one path differently from the other.
     std::uint32_t bin_of(const BuildPrim& prim) const {
-        const float centre = (prim.bounds.min[axis] + prim.bounds.max[axis]) * 0.5f;
-        float position = (centre - origin) * scale;
+        const float twice_centre = prim.bounds.min[axis] + prim.bounds.max[axis];
+        float position = (twice_centre - (origin + origin)) * (scale * 0.5f);
         position = position > 0.0f ? position : 0.0f;
         const float last = float(bin_count - 1);
         position = position < last ? position : last;
@@ -70,13 +71,21 @@ struct SplitResult {
     RangeInfo left, right;
 };
 
-/// Moves the prims `split` sends left to the front of `prims` and measures both sides in the
-/// same pass (what compute_range_info would return for each), saving a pass per child.
-/// At or above `parallel_threshold` prims the work runs in parallel blocks through `scratch`
-/// (at least prims.size() elements, contents ignored) and is a stable partition; below, it is
-/// an in-place serial partition. Either way the result depends only on the input and the
-/// threshold, never on the thread count. Precondition: split.is_valid().
+/// Moves the prims `split` sends left to the front of `prims` and measures both sides while
+/// they are in cache (what compute_range_info would return for each), saving a pass per
+/// child. With `scratch` (at least prims.size() elements, contents ignored) it partitions
+/// through it, in parallel blocks at or above `parallel_threshold` prims; scratch may be
+/// empty below the threshold, for a serial in-place partition. The result depends only on
+/// the input and the threshold, never on the thread count. Precondition: split.is_valid().
 SplitResult apply_binned_split(std::span<BuildPrim> prims, const BinnedSplit& split,
                                std::span<BuildPrim> scratch, std::size_t parallel_threshold);
+
+/// apply_binned_split without the copy back: partitions `prims` into `out` (same size,
+/// distinct memory), left prims first. Builders that alternate between two buffers save a
+/// pass over the data per split. In parallel blocks at or above `parallel_threshold` prims
+/// (a stable partition), serially below (right side reversed); never dependent on the
+/// thread count. Precondition: split.is_valid().
+SplitResult apply_binned_split_into(std::span<const BuildPrim> prims, std::span<BuildPrim> out,
+                                    const BinnedSplit& split, std::size_t parallel_threshold);
 
 }  // namespace rebraid

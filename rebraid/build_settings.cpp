@@ -23,6 +23,9 @@ void BuildSettings::validate() const {
     if (parallel_threshold < 64)
         throw Error("BuildSettings: parallel_threshold " + std::to_string(parallel_threshold) +
                     " must be >= 64");
+    if (prims_per_bin < 1)
+        throw Error("BuildSettings: prims_per_bin " + std::to_string(prims_per_bin) +
+                    " must be >= 1");
     if (task_threshold < 1)
         throw Error("BuildSettings: task_threshold " + std::to_string(task_threshold) +
                     " must be >= 1");

@@ -26,6 +26,11 @@ struct BuildSettings {
     /// numbering depends on this value, the tree's shape does not; neither depends on the
     /// thread count.
     std::size_t task_threshold = 1024;
+    /// Ranges of fewer than bin_count * prims_per_bin primitives get one bin per this many
+    /// primitives (at least 4 bins): small ranges spend most of their split search clearing
+    /// and sweeping bins. 2 builds the shared scenes about 6% faster than 1 for an SAH
+    /// within 0.02%; 4 costs up to 0.8% SAH.
+    std::uint32_t prims_per_bin = 2;
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "rebraid/bvh_stats.h"
+#include "rebraid/huge_pages.h"
 #include "rebraid/object_traversal.h"
 #include "rebraid/structure_hash.h"
 
@@ -44,6 +45,28 @@ Mesh make_world_mesh(const Scene& scene, std::vector<InstanceId>& triangle_insta
     return world;
 }
 
+/// Renumbers the world triangles in the BVH's leaf order (bvh.prim_ids becomes the identity):
+/// a hit's leaf position then names its instance and primID with one lookup instead of two
+/// dependent ones, and the arrays are read in the order traversal touches them.
+void renumber_in_leaf_order(ObjectBvh& bvh, std::vector<InstanceId>& triangle_instance,
+                            std::vector<PrimId>& triangle_prim) {
+    const std::size_t count = bvh.prim_ids.size();
+    std::vector<InstanceId> instances;
+    std::vector<PrimId> prims;
+    reserve_on_huge_pages(instances, count);
+    reserve_on_huge_pages(prims, count);
+    instances.resize(count);
+    prims.resize(count);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+        const PrimId world_prim = bvh.prim_ids[i];
+        instances[i] = triangle_instance[world_prim];
+        prims[i] = triangle_prim[world_prim];
+        bvh.prim_ids[i] = PrimId(i);
+    });
+    triangle_instance = std::move(instances);
+    triangle_prim = std::move(prims);
+}
+
 }  // namespace
 
 FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
@@ -51,9 +74,9 @@ FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
     const auto start = std::chrono::steady_clock::now();
     const Mesh world = make_world_mesh(scene, triangle_instance_, triangle_prim_);
     bvh_ = build_object_bvh(world, settings);
+    renumber_in_leaf_order(bvh_, triangle_instance_, triangle_prim_);
     build_info_.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
     build_info_.meshes = scene.meshes.size();
@@ -62,7 +85,17 @@ FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
 Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
     Hit hit;
     TraversalRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    if (intersect_object_bvh(bvh_, bvh_.root, traversal_ray, hit, counters)) {
+    // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
+    // The id lookup after traversal would miss the cache on large scenes: the ids of each
+    // leaf are asked for as the leaf is stacked or visited.
+    const InstanceId* instances = triangle_instance_.data();
+    const PrimId* prims = triangle_prim_.data();
+    const auto prefetch_ids = [instances, prims](std::uint32_t first, std::uint32_t count) {
+        prefetch_range(instances + first, count);
+        prefetch_range(prims + first, count);
+    };
+    if (intersect_object_bvh_leaf_order(bvh_, bvh_.root, traversal_ray, hit, counters,
+                                        prefetch_ids)) {
         const PrimId world_prim = hit.prim_id;
         hit.instance_id = triangle_instance_[world_prim];
         hit.prim_id = triangle_prim_[world_prim];
@@ -87,6 +120,8 @@ AccelStats FlatAccel::stats() const {
     hash.add<WideNode>(bvh_.nodes);
     hash.add_value(bvh_.root);
     hash.add<PrimId>(bvh_.prim_ids);
+    hash.add<InstanceId>(triangle_instance_);
+    hash.add<PrimId>(triangle_prim_);
     stats.structure_hash = hash.value();
     return stats;
 }

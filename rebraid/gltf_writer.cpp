@@ -173,13 +173,13 @@ private:
         tinygltf::TinyGLTF serializer;
         if (!serializer.WriteGltfSceneToFile(&model_, path_, false, false, true, false))
             fail("tinygltf could not write the file or its .bin buffer");
-        const std::filesystem::path bin_path = std::filesystem::path(path_).replace_extension(".bin");
+        const std::filesystem::path bin_path =
+            std::filesystem::path(path_).replace_extension(".bin");
         std::error_code error;
         const std::uintmax_t bin_size = std::filesystem::file_size(bin_path, error);
         if (error || bin_size != model_.buffers[0].data.size())
             fail("the buffer file '" + bin_path.string() + "' was not written completely");
-        if (std::filesystem::file_size(path_, error) == 0 || error)
-            fail("cannot write the file");
+        if (std::filesystem::file_size(path_, error) == 0 || error) fail("cannot write the file");
     }
 
     const Scene& scene_;

@@ -1,6 +1,8 @@
 #include "rebraid/instanced_accel.h"
 
 #include <chrono>
+#include <optional>
+#include <span>
 
 #include "rebraid/bvh_stats.h"
 #include "rebraid/object_traversal.h"
@@ -26,18 +28,48 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     build_info_.meshes = scene.meshes.size();
 }
 
+namespace {
+
+/// The ray mapped into the object space of the instance a top-level item names, made once
+/// per run of items of the same instance (a re-braided top level holds several items per
+/// instance, often side by side in one leaf). t is invariant under the affine map, so
+/// tnear and tfar carry over unchanged.
+class ObjectRayCache {
+public:
+    ObjectRayCache(const Ray& world_ray, std::span<const AffineTransform> world_to_object)
+        : world_ray_(world_ray), world_to_object_(world_to_object) {}
+
+    TraversalRay& ray_for(InstanceId instance_id, float tnear, float tfar) {
+        if (instance_id != instance_id_) {
+            const AffineTransform& to_object = world_to_object_[instance_id];
+            ray_.emplace(to_object.transform_point(world_ray_.org),
+                         to_object.transform_vector(world_ray_.dir), tnear, tfar);
+            instance_id_ = instance_id;
+        }
+        ray_->tnear = tnear;
+        ray_->tfar = tfar;
+        return *ray_;
+    }
+
+private:
+    const Ray& world_ray_;
+    std::span<const AffineTransform> world_to_object_;
+    InstanceId instance_id_ = kInvalidId;
+    std::optional<TraversalRay> ray_;
+};
+
+}  // namespace
+
 Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
     Hit hit;
     TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    ObjectRayCache object_rays(ray, world_to_object_);
     traverse_bvh(top_.nodes.data(), top_.root, world_ray, counters, [&](NodeRef leaf) {
         const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
             const TopLevelItem& item = top_.items[i];
-            const AffineTransform& to_object = world_to_object_[item.instance_id];
-            // t is invariant under the affine map, so tnear/tfar carry over unchanged.
-            TraversalRay object_ray(to_object.transform_point(ray.org),
-                                    to_object.transform_vector(ray.dir), world_ray.tnear,
-                                    world_ray.tfar);
+            TraversalRay& object_ray =
+                object_rays.ray_for(item.instance_id, world_ray.tnear, world_ray.tfar);
             if (intersect_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
                                      item.object_node, object_ray, hit, counters)) {
                 world_ray.tfar = object_ray.tfar;
@@ -51,20 +83,21 @@ Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counter
 
 bool InstancedAccel::occluded(const Ray& ray) const {
     TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    return traverse_bvh(top_.nodes.data(), top_.root, world_ray, nullptr, [&](NodeRef leaf) {
-        const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
-        for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
-            const TopLevelItem& item = top_.items[i];
-            const AffineTransform& to_object = world_to_object_[item.instance_id];
-            TraversalRay object_ray(to_object.transform_point(ray.org),
-                                    to_object.transform_vector(ray.dir), world_ray.tnear,
-                                    world_ray.tfar);
-            if (occluded_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
-                                    item.object_node, object_ray, nullptr))
-                return true;
-        }
-        return false;
-    });
+    ObjectRayCache object_rays(ray, world_to_object_);
+    // Any order: the first hit ends the query.
+    return traverse_bvh<TraversalOrder::any>(
+        top_.nodes.data(), top_.root, world_ray, nullptr, [&](NodeRef leaf) {
+            const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
+            for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
+                const TopLevelItem& item = top_.items[i];
+                TraversalRay& object_ray =
+                    object_rays.ray_for(item.instance_id, world_ray.tnear, world_ray.tfar);
+                if (occluded_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
+                                        item.object_node, object_ray, nullptr))
+                    return true;
+            }
+            return false;
+        });
 }
 
 AccelStats InstancedAccel::stats() const {
@@ -101,8 +134,7 @@ InstancedAccel build_two_level_accel(const Scene& scene, const ObjectBvhBuilder&
     TopLevelBvh top = build_two_level(scene, object_bvhs, top_settings);
     AccelStats info;
     info.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     info.top_build_ms = top.build_ms;
     return InstancedAccel(scene, std::move(object_bvhs), std::move(top), info);
 }

@@ -31,9 +31,9 @@ void append_transformed(Mesh& mesh, const Mesh& part, const AffineTransform& tra
 /// Appends the axis-aligned box [lo, hi].
 void append_box(Mesh& mesh, Vec3f lo, Vec3f hi) {
     static const Mesh unit_box = make_box({0.5f, 0.5f, 0.5f});
-    append_transformed(mesh, unit_box,
-                       AffineTransform::translate((lo + hi) * 0.5f) *
-                           AffineTransform::scale(hi - lo));
+    append_transformed(
+        mesh, unit_box,
+        AffineTransform::translate((lo + hi) * 0.5f) * AffineTransform::scale(hi - lo));
 }
 
 /// Appends a square bar of side `thickness` from `a` to `b`.
@@ -132,9 +132,9 @@ public:
             const float azimuth = twist + kTwoPi * static_cast<float>(c) / branch_count_ +
                                   random_.next_float(-0.3f, 0.3f);
             const float tilt = settings_.branch_angle * random_.next_float(0.8f, 1.2f);
-            Vec3f child = direction * std::cos(tilt) +
-                          (normal * std::cos(azimuth) + binormal * std::sin(azimuth)) *
-                              std::sin(tilt);
+            Vec3f child =
+                direction * std::cos(tilt) +
+                (normal * std::cos(azimuth) + binormal * std::sin(azimuth)) * std::sin(tilt);
             child = normalize(child + Vec3f{0.0f, 0.15f, 0.0f});  // branches reach for light
             const float child_length =
                 length * settings_.length_ratio * random_.next_float(0.85f, 1.15f);
@@ -211,8 +211,8 @@ Mesh make_branching_tree(const BranchingTreeSettings& settings) {
     Mesh mesh;
     mesh.name = "branching_tree";
     TreeGrower(settings, mesh)
-        .grow({0.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, settings.trunk_height,
-              settings.trunk_radius, 0);
+        .grow({0.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, settings.trunk_height, settings.trunk_radius,
+              0);
     return mesh;
 }
 
@@ -226,11 +226,11 @@ Mesh make_conifer(const ConiferSettings& settings) {
     // The trunk reaches into the lowest tier so no gap shows between them.
     const float crown_start = settings.trunk_height;
     const float step = (settings.height - crown_start) / static_cast<float>(tiers + 1);
-    append_transformed(mesh,
-                       make_cylinder({.radius = settings.trunk_radius,
-                                      .height = crown_start + step,
-                                      .segment_count = 8}),
-                       AffineTransform::identity());
+    append_transformed(
+        mesh,
+        make_cylinder(
+            {.radius = settings.trunk_radius, .height = crown_start + step, .segment_count = 8}),
+        AffineTransform::identity());
     Random random(settings.seed);
     for (std::uint32_t t = 0; t < tiers; ++t) {
         // Tier t spans two steps, so each tier overlaps the next one's lower half.
@@ -336,9 +336,10 @@ Mesh make_flanged_pipe(const FlangedPipeSettings& settings) {
                                        .segment_count = segments});
     const float span = settings.length - settings.flange_width;
     for (std::uint32_t f = 0; f < settings.flange_count; ++f) {
-        const float at = settings.flange_count == 1
-                             ? 0.5f
-                             : static_cast<float>(f) / static_cast<float>(settings.flange_count - 1);
+        const float at =
+            settings.flange_count == 1
+                ? 0.5f
+                : static_cast<float>(f) / static_cast<float>(settings.flange_count - 1);
         append_transformed(mesh, flange, along_x(-0.5f * settings.length + span * at));
     }
     return mesh;
@@ -384,8 +385,7 @@ Mesh make_building(const BuildingSettings& settings) {
     float base_y = 0.0f;
     float half_w = 0.5f * settings.width - relief, half_d = 0.5f * settings.depth - relief;
     for (std::uint32_t t = 0; t < tiers; ++t) {
-        const float tier_height =
-            settings.height * static_cast<float>(tiers - t) / weight_sum;
+        const float tier_height = settings.height * static_cast<float>(tiers - t) / weight_sum;
         const float top_y = base_y + tier_height;
         append_box(mesh, {-half_w, base_y, -half_d}, {half_w, top_y, half_d});
         // A ledge at every floor, standing out by `relief` (so within the footprint).
@@ -401,14 +401,16 @@ Mesh make_building(const BuildingSettings& settings) {
         const auto bays_x = static_cast<std::uint32_t>(2.0f * half_w / bay);
         for (std::uint32_t b = 1; b < bays_x; ++b) {
             const float x = -half_w + 2.0f * half_w * static_cast<float>(b) / bays_x;
-            append_box(mesh, {x - pilaster, base_y, half_d}, {x + pilaster, top_y, half_d + relief});
+            append_box(mesh, {x - pilaster, base_y, half_d},
+                       {x + pilaster, top_y, half_d + relief});
             append_box(mesh, {x - pilaster, base_y, -half_d - relief},
                        {x + pilaster, top_y, -half_d});
         }
         const auto bays_z = static_cast<std::uint32_t>(2.0f * half_d / bay);
         for (std::uint32_t b = 1; b < bays_z; ++b) {
             const float z = -half_d + 2.0f * half_d * static_cast<float>(b) / bays_z;
-            append_box(mesh, {half_w, base_y, z - pilaster}, {half_w + relief, top_y, z + pilaster});
+            append_box(mesh, {half_w, base_y, z - pilaster},
+                       {half_w + relief, top_y, z + pilaster});
             append_box(mesh, {-half_w - relief, base_y, z - pilaster},
                        {-half_w, top_y, z + pilaster});
         }

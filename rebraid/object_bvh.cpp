@@ -4,7 +4,19 @@
 
 #include <chrono>
 
+#include "rebraid/huge_pages.h"
+
 namespace rebraid {
+namespace {
+
+/// `vector` itself, or a copy on huge pages when it is large enough to profit (huge_pages.h).
+template <class T>
+std::vector<T> on_huge_pages_if_large(std::vector<T>&& vector) {
+    if (vector.size() * sizeof(T) < kHugePageMinBytes) return std::move(vector);
+    return copy_on_huge_pages(std::span<const T>(vector));
+}
+
+}  // namespace
 
 std::uint64_t ObjectBvh::memory_bytes() const {
     return nodes.size() * sizeof(WideNode) + prim_ids.size() * sizeof(PrimId) +
@@ -23,10 +35,11 @@ std::vector<BuildPrim> make_triangle_build_prims(const Mesh& mesh) {
 
 ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> leaf_prims) {
     ObjectBvh bvh;
-    bvh.nodes = std::move(tree.nodes);
+    bvh.nodes = on_huge_pages_if_large(std::move(tree.nodes));
     bvh.root = tree.root;
     bvh.bounds = tree.bounds;
-    bvh.prim_ids = std::move(leaf_prims);
+    bvh.prim_ids = on_huge_pages_if_large(std::move(leaf_prims));
+    reserve_on_huge_pages(bvh.triangles, bvh.prim_ids.size());
     bvh.triangles.resize(bvh.prim_ids.size());
     tbb::parallel_for(std::size_t(0), bvh.prim_ids.size(), [&](std::size_t i) {
         const auto corners = mesh.corners(bvh.prim_ids[i]);

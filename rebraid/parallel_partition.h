@@ -4,15 +4,20 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 #include <memory>
 #include <span>
-#include <utility>
+#include <type_traits>
 #include <vector>
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 
 namespace rebraid {
 
-/// What partition_summarized returns: items [0, left_count) satisfied the predicate; `left`
-/// and `right` summarise each side.
+/// What the partitions below return: elements [0, left_count) of the output satisfied the
+/// predicate; `left` and `right` summarise each side.
 template <class Summary>
 struct PartitionResult {
     std::size_t left_count = 0;
@@ -20,39 +25,104 @@ struct PartitionResult {
 };
 
 /// Elements per block of the parallel partition. Blocks are fixed by position, never by the
-/// thread count; the parallel partition is stable, so its result does not even depend on
-/// this value.
+/// thread count.
 inline constexpr std::size_t kPartitionBlock = 4096;
 
-/// Moves the elements for which `goes_left` holds to the front of `items` and summarises
-/// each side on the way: `Summary` is default-constructible (empty) with `add(const T&)` and
-/// `merge(const Summary&)`, and merging must be exact (min/max, integer sums), so that any
-/// division into blocks gives the same summary.
+namespace partition_detail {
+
+/// Copies one element as raw bytes: a 32-byte BuildPrim then moves with one vector load and
+/// store rather than field by field (partitioning is bound by stores).
+template <class T>
+void copy_element(T* to, const T* from) {
+#if defined(__AVX__)
+    // Compilers tuned for generic x86-64 expand a 32-byte memcpy into two 16-byte moves.
+    if constexpr (sizeof(T) == 32) {
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(to),
+                            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(from)));
+        return;
+    }
+#endif
+    std::memcpy(static_cast<void*>(to), static_cast<const void*>(from), sizeof(T));
+}
+
+/// Adds items[begin, end) to `summary`, accumulating in a local: the summary's fields could
+/// alias the items' as far as the compiler knows, and would go through memory every step.
+template <class Summary, class T>
+void summarize(Summary& summary, const T* items, std::size_t begin, std::size_t end) {
+    Summary local;
+    for (std::size_t i = begin; i < end; ++i) local.add(items[i]);
+    summary.merge(local);
+}
+
+/// Branch-free Lomuto partition in place: every element is swapped with the first right
+/// element and the boundary advances when it went left. A branch per element would be
+/// mispredicted about half the time, which costs more than the unconditional swap.
+template <class T, class Predicate>
+std::size_t partition_in_place(T* items, std::size_t count, Predicate goes_left) {
+    std::size_t left = 0;
+    alignas(T) unsigned char item[sizeof(T)];
+    for (std::size_t i = 0; i < count; ++i) {
+        const bool is_left = goes_left(items[i]);
+        std::memcpy(item, static_cast<const void*>(items + i), sizeof(T));
+        copy_element(items + i, items + left);
+        std::memcpy(static_cast<void*>(items + left), item, sizeof(T));
+        left += is_left;
+    }
+    return left;
+}
+
+/// Branch-free partition of in[0, count) into out[0, count): left elements forward from the
+/// front, right ones backward from the back (so the right side comes out reversed). The
+/// destination is selected, not branched to.
+template <class T, class Predicate>
+std::size_t partition_two_sided(const T* in, std::size_t count, T* out, Predicate goes_left) {
+    T* left = out;
+    T* right = out + count;
+    for (std::size_t i = 0; i < count; ++i) {
+        const bool is_left = goes_left(in[i]);
+        copy_element(is_left ? left : right - 1, in + i);
+        left += is_left;
+        right -= !is_left;
+    }
+    return std::size_t(left - out);
+}
+
+/// Branch-free stable scatter of in[0, count) to the runs starting at `left` and `right`.
+template <class T, class Predicate>
+void scatter(const T* in, std::size_t count, T* left, T* right, Predicate goes_left) {
+    for (std::size_t i = 0; i < count; ++i) {
+        const bool is_left = goes_left(in[i]);
+        copy_element(is_left ? left : right, in + i);
+        left += is_left;
+        right += !is_left;
+    }
+}
+
+}  // namespace partition_detail
+
+/// Partitions `in` into `out` (same size, distinct memory): the elements for which
+/// `goes_left` holds first, and summarises each side while it is in cache: `Summary` is
+/// default-constructible (empty) with `add(const T&)` and `merge(const Summary&)`, and
+/// merging must be exact (min/max, integer sums), so that any division into blocks gives
+/// the same summary. T must be trivially copyable.
 ///
-/// At or above `parallel_threshold` elements: a stable partition in two parallel passes over
-/// fixed blocks. Pass 1 partitions each block into the same positions of `scratch` (left
-/// elements forward from the block's start, right ones backward from its end) and counts
-/// them; pass 2 copies both parts to slots from exclusive prefix sums over the blocks. The
-/// predicate runs once per element. Below the threshold: an in-place serial partition
-/// (Hoare's two scans; not stable). `scratch` needs items.size() elements on the parallel
-/// path only. The result depends only on the input and the threshold.
+/// Below `parallel_threshold` elements: one serial pass writing left elements forward and
+/// right ones backward. At or above it, two parallel passes over fixed blocks: count each
+/// block's left elements, then scatter every block to slots from exclusive prefix sums (a
+/// stable partition). The result depends only on the input and the threshold, never on the
+/// thread count or timing.
 template <class Summary, class T, class Predicate>
-PartitionResult<Summary> partition_summarized(std::span<T> items, Predicate goes_left,
-                                              std::size_t parallel_threshold,
-                                              std::span<T> scratch) {
+PartitionResult<Summary> partition_summarized_into(std::span<const T> in, std::span<T> out,
+                                                   Predicate goes_left,
+                                                   std::size_t parallel_threshold) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    using namespace partition_detail;
     PartitionResult<Summary> result;
-    if (items.size() < parallel_threshold) {
-        std::size_t first = 0, last = items.size();
-        for (;;) {
-            while (first < last && goes_left(items[first])) result.left.add(items[first++]);
-            while (first < last && !goes_left(items[last - 1])) result.right.add(items[--last]);
-            if (first == last) break;
-            // items[first] goes right and items[last - 1] goes left: swap them into place.
-            std::swap(items[first], items[last - 1]);
-            result.left.add(items[first++]);
-            result.right.add(items[--last]);
-        }
-        result.left_count = first;
+    const std::size_t n = in.size();
+    if (n < parallel_threshold) {
+        result.left_count = partition_two_sided(in.data(), n, out.data(), goes_left);
+        summarize(result.left, out.data(), 0, result.left_count);
+        summarize(result.right, out.data(), result.left_count, n);
         return result;
     }
 
@@ -60,44 +130,74 @@ PartitionResult<Summary> partition_summarized(std::span<T> items, Predicate goes
         std::size_t left_count = 0, left_offset = 0;
         Summary left, right;
     };
-    const std::size_t n = items.size();
     const std::size_t block_count = (n + kPartitionBlock - 1) / kPartitionBlock;
     std::vector<Block> blocks(block_count);
+    auto block_begin = [](std::size_t b) { return b * kPartitionBlock; };
+    auto block_end = [n](std::size_t b) { return std::min(n, (b + 1) * kPartitionBlock); };
     tbb::parallel_for(std::size_t(0), block_count, [&](std::size_t b) {
-        const std::size_t begin = b * kPartitionBlock, end = std::min(n, begin + kPartitionBlock);
-        Block& block = blocks[b];
-        std::size_t left = begin, right = end;
-        for (std::size_t i = begin; i < end; ++i) {
-            if (goes_left(items[i])) {
-                block.left.add(items[i]);
-                scratch[left++] = items[i];
-            } else {
-                block.right.add(items[i]);
-                scratch[--right] = items[i];
-            }
-        }
-        block.left_count = left - begin;
+        std::size_t count = 0;
+        for (std::size_t i = block_begin(b); i < block_end(b); ++i) count += goes_left(in[i]);
+        blocks[b].left_count = count;
     });
-    // Exclusive prefix sums: block b's left part starts at left_offset, its right part at
-    // left_total + (begin - left_offset) (the right elements of the blocks before it).
+    // Exclusive prefix sums: block b's left elements go to left_offset, its right ones to
+    // left_total + (begin - left_offset) (after the right elements of the blocks before it).
     std::size_t left_total = 0;
     for (Block& block : blocks) {
         block.left_offset = left_total;
         left_total += block.left_count;
+    }
+    tbb::parallel_for(std::size_t(0), block_count, [&](std::size_t b) {
+        Block& block = blocks[b];
+        const std::size_t begin = block_begin(b), end = block_end(b);
+        const std::size_t right_offset = left_total + (begin - block.left_offset);
+        scatter(in.data() + begin, end - begin, out.data() + block.left_offset,
+                out.data() + right_offset, goes_left);
+        summarize(block.left, out.data(), block.left_offset,
+                  block.left_offset + block.left_count);
+        summarize(block.right, out.data(), right_offset,
+                  right_offset + (end - begin - block.left_count));
+    });
+    for (const Block& block : blocks) {
         result.left.merge(block.left);
         result.right.merge(block.right);
     }
-    tbb::parallel_for(std::size_t(0), block_count, [&](std::size_t b) {
-        const std::size_t begin = b * kPartitionBlock, end = std::min(n, begin + kPartitionBlock);
-        const Block& block = blocks[b];
-        const std::size_t split = begin + block.left_count;
-        std::copy(scratch.begin() + begin, scratch.begin() + split,
-                  items.begin() + block.left_offset);
-        // The right part was written backwards: reverse it back into input order.
-        std::reverse_copy(scratch.begin() + split, scratch.begin() + end,
-                          items.begin() + left_total + (begin - block.left_offset));
-    });
     result.left_count = left_total;
+    return result;
+}
+
+/// In-place form of partition_summarized_into: with `scratch` (at least items.size()
+/// elements, contents ignored) it partitions into scratch and copies back; without, only
+/// allowed below `parallel_threshold`, it runs a serial in-place partition. Either way the
+/// result depends only on the input and the threshold, never on the thread count.
+template <class Summary, class T, class Predicate>
+PartitionResult<Summary> partition_summarized(std::span<T> items, Predicate goes_left,
+                                              std::size_t parallel_threshold,
+                                              std::span<T> scratch) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    using namespace partition_detail;
+    const std::size_t n = items.size();
+    if (scratch.size() < n) {
+        PartitionResult<Summary> result;
+        result.left_count = partition_in_place(items.data(), n, goes_left);
+        summarize(result.left, items.data(), 0, result.left_count);
+        summarize(result.right, items.data(), result.left_count, n);
+        return result;
+    }
+    const std::span<T> out = scratch.first(n);
+    PartitionResult<Summary> result = partition_summarized_into<Summary>(
+        std::span<const T>(items), out, goes_left, parallel_threshold);
+    auto copy_back = [&](std::size_t begin, std::size_t end) {
+        std::memcpy(static_cast<void*>(items.data() + begin),
+                    static_cast<const void*>(out.data() + begin), (end - begin) * sizeof(T));
+    };
+    if (n < parallel_threshold) {
+        copy_back(0, n);
+    } else {
+        const std::size_t block_count = (n + kPartitionBlock - 1) / kPartitionBlock;
+        tbb::parallel_for(std::size_t(0), block_count, [&](std::size_t b) {
+            copy_back(b * kPartitionBlock, std::min(n, (b + 1) * kPartitionBlock));
+        });
+    }
     return result;
 }
 
@@ -109,8 +209,9 @@ struct NoSummary {
 };
 
 /// Moves the elements for which `goes_left` holds to the front and returns how many there
-/// are (partition_summarized without summaries, with its own scratch space). The result
-/// depends only on the input and `parallel_threshold`, never on the thread count or timing.
+/// are (partition_summarized without summaries, with its own scratch space above the
+/// threshold). The result depends only on the input and `parallel_threshold`, never on the
+/// thread count or timing.
 template <class T, class Predicate>
 std::size_t parallel_partition(std::span<T> items, Predicate goes_left,
                                std::size_t parallel_threshold) {

@@ -28,7 +28,9 @@ Vec3f random_unit_vector(Random& random) {
     return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
-AffineTransform uniform_scale(float s) { return AffineTransform::scale({s, s, s}); }
+AffineTransform uniform_scale(float s) {
+    return AffineTransform::scale({s, s, s});
+}
 
 /// Rotation taking object +X to the unit vector `axis`, turned by `spin` radians about it.
 AffineTransform align_x_to(Vec3f axis, float spin) {
@@ -64,9 +66,8 @@ std::vector<Mesh> make_forest_meshes(bool is_high_detail, Random& random) {
                                   .leaf_count = 14,
                                   .seed = random.next_u32()};
     ConiferSettings conifer{.seed = random.next_u32()};
-    TreeSettings lumpy{.canopy_segment_count = 48,
-                       .canopy_ring_count = 32,
-                       .seed = random.next_u32()};
+    TreeSettings lumpy{
+        .canopy_segment_count = 48, .canopy_ring_count = 32, .seed = random.next_u32()};
     if (is_high_detail) {
         broad_a.level_count = 4, broad_a.branch_count = 4, broad_a.segment_count = 10;
         broad_a.leaf_count = 16, broad_a.length_ratio = 0.68f;
@@ -115,8 +116,8 @@ Scene make_forest(std::uint32_t count, std::uint64_t seed, bool is_high_detail) 
 
 enum CrownMesh : MeshId { kBand, kRim, kPearl, kKnot, kGem, kBead, kOrb, kBar, kCrownMeshCount };
 
-constexpr float kBandHeight = 0.35f;   ///< the band spans y in [0, kBandHeight], radius 1
-constexpr float kArchTop = 1.45f;      ///< where the arches meet, under the orb
+constexpr float kBandHeight = 0.35f;  ///< the band spans y in [0, kBandHeight], radius 1
+constexpr float kArchTop = 1.45f;     ///< where the arches meet, under the orb
 constexpr float kMaxJewelSize = 0.08f;
 
 /// Radius of each ornament mesh's object: placing it at size s scales it by s / radius.
@@ -144,9 +145,8 @@ std::vector<Mesh> make_crown_meshes() {
                                .major_segment_count = 192,
                                .minor_segment_count = 12});
     meshes[kPearl] = make_uv_sphere({.radius = 1.0f, .segment_count = 24, .ring_count = 16});
-    meshes[kKnot] = make_torus_knot({.tube_radius = 0.18f,
-                                     .path_segment_count = 160,
-                                     .tube_segment_count = 10});
+    meshes[kKnot] = make_torus_knot(
+        {.tube_radius = 0.18f, .path_segment_count = 160, .tube_segment_count = 10});
     meshes[kGem] = make_gem({.facet_count = 24});
     meshes[kBead] = make_torus({.major_radius = 1.0f,
                                 .minor_radius = 0.4f,
@@ -201,7 +201,8 @@ Scene make_crown(std::uint32_t count, std::uint64_t seed) {
     // Structure: the band, two rims, the orb and a cross on it.
     const float orb_radius = 0.14f, orb_y = kArchTop + 0.1f;
     crown.add_fixed(kBand, AffineTransform::identity());
-    crown.add_fixed(kRim, uniform_scale(1.02f));
+    // The rim tube (radius 0.025 x 1.02) rests on y = 0 like the band.
+    crown.add_fixed(kRim, AffineTransform::translate({0, 0.026f, 0}) * uniform_scale(1.02f));
     crown.add_fixed(kRim, AffineTransform::translate({0, kBandHeight, 0}) * uniform_scale(1.02f));
     crown.add_fixed(kOrb, AffineTransform::translate({0, orb_y, 0}) * uniform_scale(orb_radius));
     const float cross_y = orb_y + orb_radius;
@@ -260,7 +261,8 @@ Scene make_crown(std::uint32_t count, std::uint64_t seed) {
                 out * std::cos(t) + up * (kBandHeight + 0.05f + rise * std::sin(t));
             const Vec3f tangent = normalize(out * -std::sin(t) + up * (rise * std::cos(t)));
             const MeshId mesh = j % 3 != 2 ? kPearl : (j % 6 == 2 ? kBead : kKnot);
-            crown.add(mesh, center, tangent, size);
+            // Beads stand in the arch's plane (axis across it) so they touch their neighbours.
+            crown.add(mesh, center, mesh == kBead ? Vec3f{-out.z, 0.0f, out.x} : tangent, size);
         }
     }
     return scene;
@@ -273,10 +275,8 @@ Scene make_powerplant(std::uint32_t count, std::uint64_t seed) {
     Scene scene;
     // Unit-length objects along X; instances scale them uniformly to their length.
     scene.meshes.push_back(make_flanged_pipe({}));
-    scene.meshes.push_back(make_flanged_pipe({.radius = 0.015f,
-                                              .flange_count = 5,
-                                              .flange_radius = 0.024f,
-                                              .flange_width = 0.006f}));
+    scene.meshes.push_back(make_flanged_pipe(
+        {.radius = 0.015f, .flange_count = 5, .flange_radius = 0.024f, .flange_width = 0.006f}));
     scene.meshes.push_back(make_i_beam({}));
     scene.meshes.push_back(make_truss({.panel_count = 24}));
     const char* names[] = {"pipe", "flanged_pipe", "i_beam", "truss"};
@@ -293,15 +293,16 @@ Scene make_powerplant(std::uint32_t count, std::uint64_t seed) {
         const MeshId mesh_id = random.next_below(static_cast<std::uint32_t>(scene.meshes.size()));
         const float length = extent * random.next_float(0.25f, 0.8f);
         const bool is_axis_aligned = random.next_below(2) == 0;
-        const Vec3f axis = is_axis_aligned ? axes[random.next_below(3)] : random_unit_vector(random);
+        const Vec3f axis =
+            is_axis_aligned ? axes[random.next_below(3)] : random_unit_vector(random);
         // Aligned beams turn by quarter turns about their axis, the others by any angle.
         const float spin = is_axis_aligned ? 0.5f * kPi * static_cast<float>(random.next_below(4))
                                            : random.next_float(0.0f, kTwoPi);
         const Vec3f center{random.next_float(-0.5f, 0.5f) * extent,
                            random.next_float(0.0f, 1.0f) * extent,
                            random.next_float(-0.5f, 0.5f) * extent};
-        AffineTransform transform = AffineTransform::translate(center) *
-                                    align_x_to(axis, spin) * uniform_scale(length);
+        AffineTransform transform =
+            AffineTransform::translate(center) * align_x_to(axis, spin) * uniform_scale(length);
         // Lift objects that reach below the floor so they rest on it.
         const float lowest = transform.transform_bbox(mesh_bounds[mesh_id]).min.y;
         if (lowest < 0.0f) transform.translation.y -= lowest;
@@ -360,17 +361,17 @@ Scene make_city(std::uint32_t count, std::uint64_t seed) {
         // Taller downtown: the height stretch falls off from the centre of the grid.
         const float centrality = 1.0f - std::sqrt(cell_x * cell_x + cell_z * cell_z) / max_distance;
         const float stretch = random.next_float(0.7f, 1.3f) * (0.6f + 0.9f * centrality);
-        const AffineTransform shape = quarter_turn_about_y(quarter_turns) *
-                                      AffineTransform::scale({footprint_scale, stretch,
-                                                              footprint_scale});
+        const AffineTransform shape =
+            quarter_turn_about_y(quarter_turns) *
+            AffineTransform::scale({footprint_scale, stretch, footprint_scale});
         // Jitter inside the cell, keeping kMinGap / 2 from its edges.
         const BBox3f box = shape.transform_bbox(scene.meshes[mesh_id].bounds());
         const float room_x = std::max(0.0f, kCellSize - kMinGap - (box.max.x - box.min.x));
         const float room_z = std::max(0.0f, kCellSize - kMinGap - (box.max.z - box.min.z));
-        const float x = cell_x - 0.5f * (box.min.x + box.max.x) +
-                        random.next_float(-0.5f, 0.5f) * room_x;
-        const float z = cell_z - 0.5f * (box.min.z + box.max.z) +
-                        random.next_float(-0.5f, 0.5f) * room_z;
+        const float x =
+            cell_x - 0.5f * (box.min.x + box.max.x) + random.next_float(-0.5f, 0.5f) * room_x;
+        const float z =
+            cell_z - 0.5f * (box.min.z + box.max.z) + random.next_float(-0.5f, 0.5f) * room_z;
         scene.instances.push_back({mesh_id, AffineTransform::translate({x, 0.0f, z}) * shape});
     }
     return scene;
@@ -378,7 +379,9 @@ Scene make_city(std::uint32_t count, std::uint64_t seed) {
 
 }  // namespace
 
-std::span<const SceneKind> all_scene_kinds() { return kAllKinds; }
+std::span<const SceneKind> all_scene_kinds() {
+    return kAllKinds;
+}
 
 std::string_view scene_kind_name(SceneKind kind) {
     switch (kind) {

@@ -31,7 +31,7 @@ enum class SceneKind {
     /// multiples of 90 degrees and scaled, with streets between them, so no two instance
     /// boxes overlap: the case where re-braiding must cost nothing. Default 2,500 instances.
     kCity,
-    /// The forest of kTrees with high-detail trees (10-16k triangles each): by default 12,000
+    /// The forest of kTrees with high-detail trees (12-16k triangles each): by default 12,000
     /// instances and about 170 M instanced triangles, which instancing keeps small in memory
     /// and on disk but a flat BVH over all triangles cannot afford (paper's Trees: 12,000
     /// instances, 522 M triangles).

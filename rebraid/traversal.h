@@ -7,14 +7,11 @@
 
 #include "rebraid/accel.h"
 #include "rebraid/ray.h"
+#include "rebraid/simd_config.h"
 #include "rebraid/wide_node.h"
 
-#if defined(__AVX2__) && defined(__FMA__)
-#include <immintrin.h>
-#define REBRAID_SIMD_AVX2 1
-#endif
-
 namespace rebraid {
+inline namespace REBRAID_SIMD_NAMESPACE {
 
 /// A ray prepared for box tests: reciprocal direction with zero components replaced by tiny
 /// ones (so no 0 * inf appears) and, per axis, the byte offsets inside a WideNode of the
@@ -30,19 +27,20 @@ struct TraversalRay {
 
     TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far)
         : org(origin), dir(direction), tnear(t_near), tfar(t_far) {
-        constexpr std::uint32_t lower[3] = {offsetof(WideNode, lower_x),
-                                            offsetof(WideNode, lower_y),
-                                            offsetof(WideNode, lower_z)};
-        constexpr std::uint32_t upper[3] = {offsetof(WideNode, upper_x),
-                                            offsetof(WideNode, upper_y),
-                                            offsetof(WideNode, upper_z)};
+        // WideNode stores each axis's lower plane array followed by its upper one.
+        static_assert(offsetof(WideNode, upper_x) == offsetof(WideNode, lower_x) + 32 &&
+                      offsetof(WideNode, lower_y) == offsetof(WideNode, lower_x) + 64 &&
+                      offsetof(WideNode, upper_y) == offsetof(WideNode, lower_x) + 96 &&
+                      offsetof(WideNode, lower_z) == offsetof(WideNode, lower_x) + 128 &&
+                      offsetof(WideNode, upper_z) == offsetof(WideNode, lower_x) + 160);
+        constexpr std::uint32_t kLowerX = offsetof(WideNode, lower_x);
         for (int a = 0; a < 3; ++a) {
             const float d = direction[a];
             const float safe = std::fabs(d) < 1e-18f ? std::copysign(1e-18f, d) : d;
             rdir[a] = 1.0f / safe;
-            const bool near_is_lower = rdir[a] >= 0.0f;
-            near_offset[a] = near_is_lower ? lower[a] : upper[a];
-            far_offset[a] = near_is_lower ? upper[a] : lower[a];
+            const std::uint32_t is_negative = rdir[a] >= 0.0f ? 0u : 1u;
+            near_offset[a] = kLowerX + 64u * std::uint32_t(a) + 32u * is_negative;
+            far_offset[a] = kLowerX + 64u * std::uint32_t(a) + 32u * (1u - is_negative);
         }
     }
 };
@@ -78,14 +76,22 @@ inline unsigned intersect_node_simd(const WideNode& node, const NodeTestRay& ray
     const auto plane = [&](std::uint32_t offset) {
         return _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
     };
-    const __m256 near_x = _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[0]), ray.org[0]), ray.rdir[0]);
-    const __m256 near_y = _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[1]), ray.org[1]), ray.rdir[1]);
-    const __m256 near_z = _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[2]), ray.org[2]), ray.rdir[2]);
-    const __m256 far_x = _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[0]), ray.org[0]), ray.rdir[0]);
-    const __m256 far_y = _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[1]), ray.org[1]), ray.rdir[1]);
-    const __m256 far_z = _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[2]), ray.org[2]), ray.rdir[2]);
-    entry = _mm256_max_ps(_mm256_max_ps(near_x, near_y), _mm256_max_ps(near_z, _mm256_set1_ps(tnear)));
-    const __m256 exit = _mm256_min_ps(_mm256_min_ps(far_x, far_y), _mm256_min_ps(far_z, _mm256_set1_ps(tfar)));
+    const __m256 near_x =
+        _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[0]), ray.org[0]), ray.rdir[0]);
+    const __m256 near_y =
+        _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[1]), ray.org[1]), ray.rdir[1]);
+    const __m256 near_z =
+        _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[2]), ray.org[2]), ray.rdir[2]);
+    const __m256 far_x =
+        _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[0]), ray.org[0]), ray.rdir[0]);
+    const __m256 far_y =
+        _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[1]), ray.org[1]), ray.rdir[1]);
+    const __m256 far_z =
+        _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[2]), ray.org[2]), ray.rdir[2]);
+    entry =
+        _mm256_max_ps(_mm256_max_ps(near_x, near_y), _mm256_max_ps(near_z, _mm256_set1_ps(tnear)));
+    const __m256 exit =
+        _mm256_min_ps(_mm256_min_ps(far_x, far_y), _mm256_min_ps(far_z, _mm256_set1_ps(tfar)));
     const __m256 robust_exit = _mm256_mul_ps(exit, _mm256_set1_ps(kRobustBoxScale));
     return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(entry, robust_exit, _CMP_LE_OQ)));
 }
@@ -129,13 +135,30 @@ enum class TraversalOrder {
     any,
 };
 
+/// Asks the cache for the node `ref` names (all four lines of its 224 bytes).
+inline void prefetch_node(const WideNode* nodes, NodeRef ref) {
+    const char* base = reinterpret_cast<const char*>(nodes + ref.node_id());
+    for (int offset = 0; offset < int(sizeof(WideNode)); offset += 64)
+        __builtin_prefetch(base + offset);
+}
+
+/// A leaf prefetcher that does nothing (traverse_bvh's default).
+struct NoLeafPrefetch {
+    void operator()(NodeRef) const {}
+};
+
 /// Depth-first traversal of the wide BVH `nodes` from `start` (any node, or a leaf
 /// reference). `visit_leaf(NodeRef leaf)` tests a leaf's primitives, shrinking ray.tfar on
 /// hits, and returns true to stop traversal (any-hit queries). Returns whether traversal was
 /// stopped by visit_leaf.
-template <TraversalOrder order = TraversalOrder::nearest_first, class LeafVisitor>
+/// `prefetch_leaf(NodeRef leaf)` is called for hit leaves that wait on the stack, and every
+/// stacked inner node is prefetched: on scenes larger than the caches, the misses of the
+/// siblings then overlap with the work on the nearest child instead of following it.
+template <TraversalOrder order = TraversalOrder::nearest_first, class LeafVisitor,
+          class LeafPrefetcher = NoLeafPrefetch>
 bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
-                  TraversalCounters* counters, LeafVisitor&& visit_leaf) {
+                  TraversalCounters* counters, LeafVisitor&& visit_leaf,
+                  LeafPrefetcher&& prefetch_leaf = {}) {
     // A stack entry packs a child's entry distance (high half, as float bits) with its
     // reference (low half); for the non-negative distances of valid rays, comparing entries
     // as integers compares distances. The array is left uninitialised on purpose: clearing
@@ -149,7 +172,11 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
     const auto entry_distance = [](std::uint64_t entry) {
         return std::bit_cast<float>(std::uint32_t(entry >> 32));
     };
-    const auto make_entry = [](NodeRef ref, float distance) {
+    const auto make_entry = [&](NodeRef ref, float distance) {
+        if (ref.is_leaf())
+            prefetch_leaf(ref);
+        else
+            prefetch_node(nodes, ref);
         return (std::uint64_t(std::bit_cast<std::uint32_t>(distance)) << 32) | ref.bits();
     };
 #ifdef REBRAID_SIMD_AVX2
@@ -159,6 +186,9 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
     for (;;) {
         while (current.is_inner()) {
             const WideNode& node = nodes[current.node_id()];
+            // The child references sit on the node's last cache line, which is read only once
+            // the box test is done; asking for it now overlaps its miss with the test's.
+            __builtin_prefetch(node.children);
             if (counters) ++counters->nodes_visited;
             alignas(32) float distances[kBvhWidth];
 #ifdef REBRAID_SIMD_AVX2
@@ -187,10 +217,21 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
                 } while (mask);
                 continue;
             }
-            // Several hits: push them all, sort the pushed run far to near (insertion sort:
-            // runs are short, usually 2-3), then continue with the nearest, popped again.
+            const int second = std::countr_zero(mask);
+            mask &= mask - 1;
+            if (mask == 0) {  // two hits, the most common case: stack the farther one
+                const bool first_is_near = distances[first] <= distances[second];
+                const int near_slot = first_is_near ? first : second;
+                const int far_slot = first_is_near ? second : first;
+                stack[stack_size++] = make_entry(node.children[far_slot], distances[far_slot]);
+                current = node.children[near_slot];
+                continue;
+            }
+            // Three or more: push them all, sort the pushed run far to near (insertion sort,
+            // runs are short), then continue with the nearest, popped again.
             const int run_begin = stack_size;
             stack[stack_size++] = make_entry(node.children[first], distances[first]);
+            mask |= 1u << second;
             do {
                 const int slot = std::countr_zero(mask);
                 mask &= mask - 1;
@@ -217,4 +258,5 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
     }
 }
 
+}  // namespace REBRAID_SIMD_NAMESPACE
 }  // namespace rebraid

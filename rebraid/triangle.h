@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 
 #include "rebraid/types.h"
 
@@ -12,12 +13,19 @@ struct TriangleVerts {
     Vec3f v0, v1, v2;
 };
 
+/// Edge functions within this fraction of their sum count as zero (inside): rounding makes
+/// the near-zero functions of the edges around a vertex take arbitrary signs, and a ray
+/// through a shared vertex must still hit one of the triangles around it. One float epsilon,
+/// as Embree's robust mode.
+inline constexpr float kEdgeTolerance = 1.1920929e-07f;
+
 /// Ray-triangle test with edge functions in Plücker form on origin-relative corners: for
 /// the edge from p to q, dot(cross(p - q, p + q), dir). An edge shared by two triangles then
 /// yields exactly negated values in both, so a ray through the edge hits at least one of
-/// them (no cracks); and since p - q is the short edge vector rather than a difference of
-/// two long origin-relative products, far-away origins lose no precision. Returns true and
-/// sets t, u, v (barycentric weights of v1 and v2, Embree's convention) when
+/// them (no cracks), and the tolerance kEdgeTolerance closes vertices the same way. Far-away
+/// origins keep their precision: p - q is the short edge vector, so the cross product never
+/// cancels two long, nearly parallel origin-relative vectors as cross(p, q) would. Returns
+/// true and sets t, u, v (barycentric weights of v1 and v2, Embree's convention) when
 /// tnear <= t <= tfar. Degenerate triangles never hit.
 inline bool intersect_triangle(const TriangleVerts& tri, Vec3f org, Vec3f dir, float tnear,
                                float tfar, float& t, float& u, float& v) {
@@ -27,10 +35,11 @@ inline bool intersect_triangle(const TriangleVerts& tri, Vec3f org, Vec3f dir, f
     const float w0 = dot(cross(b - c, b + c), dir);  // opposite v0
     const float w1 = dot(cross(c - a, c + a), dir);  // opposite v1
     const float w2 = dot(cross(a - b, a + b), dir);  // opposite v2
-    const bool all_positive = w0 >= 0.0f && w1 >= 0.0f && w2 >= 0.0f;
-    const bool all_negative = w0 <= 0.0f && w1 <= 0.0f && w2 <= 0.0f;
-    if (!all_positive && !all_negative) return false;
     const float sum = w0 + w1 + w2;
+    const float tolerance = kEdgeTolerance * std::fabs(sum);
+    const bool all_positive = w0 >= -tolerance && w1 >= -tolerance && w2 >= -tolerance;
+    const bool all_negative = w0 <= tolerance && w1 <= tolerance && w2 <= tolerance;
+    if (!all_positive && !all_negative) return false;
     if (sum == 0.0f) return false;  // ray parallel to the plane, or a degenerate triangle
     const Vec3f normal = cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
     const float normal_dot_dir = dot(normal, dir);

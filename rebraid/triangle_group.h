@@ -4,14 +4,11 @@
 #include <bit>
 #include <cstdint>
 
+#include "rebraid/simd_config.h"
 #include "rebraid/triangle.h"
 
-#if defined(__AVX2__) && defined(__FMA__)
-#include <immintrin.h>
-#define REBRAID_SIMD_AVX2 1
-#endif
-
 namespace rebraid {
+inline namespace REBRAID_SIMD_NAMESPACE {
 
 /// Most triangles one call of the group tests handles (one AVX2 register of lanes).
 inline constexpr std::uint32_t kTriangleGroupSize = 8;
@@ -62,38 +59,42 @@ inline __m256 dot(const Vec3x8& a, const Vec3x8& b) {
     return _mm256_fmadd_ps(a.x, b.x, _mm256_fmadd_ps(a.y, b.y, _mm256_mul_ps(a.z, b.z)));
 }
 
-/// Two 16-byte loads into the low and high halves of a register.
-inline __m256 load_pair(const float* low, const float* high) {
-    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(low)), _mm_loadu_ps(high), 1);
-}
-
 /// The corners of up to 8 triangles turned from the array-of-structures storage into one
 /// lane per triangle. Lane i holds triangle min(i, count - 1): surplus lanes repeat the last
-/// triangle (no read past the group) and are masked off by the caller.
+/// triangle (no read past the group) and are masked off by the caller; for groups of at most
+/// four (the common leaf), lanes 4..7 are zero and only half the rows are loaded.
 /// Each 16-byte row load takes a corner's x, y, z plus a neighbouring float; corner 2 is read
 /// starting one float early (v1.z) so no load runs past the triangle's 36 bytes.
 struct GroupCorners {
+    static_assert(sizeof(TriangleVerts) == 36, "rows are read at fixed float offsets");
     Vec3x8 corner[3];
 
     GroupCorners(const TriangleVerts* tris, std::uint32_t count) {
         const float* row[kTriangleGroupSize];
         for (std::uint32_t i = 0; i < kTriangleGroupSize; ++i)
             row[i] = &tris[std::min(i, count - 1)].v0.x;
+        const bool is_half = count <= 4;
         // Rows of lane pairs (j, j + 4) share a register: a 4x4 transpose per 128-bit half
         // then yields lanes in order 0..7.
+        const auto rows = [&](int j, int offset) {
+            const __m128 low = _mm_loadu_ps(row[j] + offset);
+            if (is_half) return _mm256_zextps128_ps256(low);
+            return _mm256_insertf128_ps(_mm256_castps128_ps256(low),
+                                        _mm_loadu_ps(row[j + 4] + offset), 1);
+        };
         for (int c = 0; c < 3; ++c) {
             const int offset = c == 2 ? 5 : 3 * c;
-            const __m256 r0 = load_pair(row[0] + offset, row[4] + offset);
-            const __m256 r1 = load_pair(row[1] + offset, row[5] + offset);
-            const __m256 r2 = load_pair(row[2] + offset, row[6] + offset);
-            const __m256 r3 = load_pair(row[3] + offset, row[7] + offset);
+            const __m256 r0 = rows(0, offset), r1 = rows(1, offset);
+            const __m256 r2 = rows(2, offset), r3 = rows(3, offset);
             const __m256 lo01 = _mm256_unpacklo_ps(r0, r1), lo23 = _mm256_unpacklo_ps(r2, r3);
             const __m256 hi01 = _mm256_unpackhi_ps(r0, r1), hi23 = _mm256_unpackhi_ps(r2, r3);
             if (c < 2) {  // x, y, z = elements 0, 1, 2 of each row
-                corner[c] = {_mm256_shuffle_ps(lo01, lo23, 0x44), _mm256_shuffle_ps(lo01, lo23, 0xee),
+                corner[c] = {_mm256_shuffle_ps(lo01, lo23, 0x44),
+                             _mm256_shuffle_ps(lo01, lo23, 0xee),
                              _mm256_shuffle_ps(hi01, hi23, 0x44)};
             } else {  // x, y, z = elements 1, 2, 3
-                corner[c] = {_mm256_shuffle_ps(lo01, lo23, 0xee), _mm256_shuffle_ps(hi01, hi23, 0x44),
+                corner[c] = {_mm256_shuffle_ps(lo01, lo23, 0xee),
+                             _mm256_shuffle_ps(hi01, hi23, 0x44),
                              _mm256_shuffle_ps(hi01, hi23, 0xee)};
             }
         }
@@ -101,7 +102,8 @@ struct GroupCorners {
 };
 
 /// Lanes (bits) of the group whose triangle the ray hits with tnear <= t <= tfar, with the
-/// edge weights and t per lane. Same arithmetic as intersect_triangle(), eight at a time.
+/// edge weights and t per lane. Same arithmetic as intersect_triangle(), eight at a time
+/// (with fused multiply-adds, which keep the exact negation of shared edges' functions).
 struct GroupTest {
     unsigned mask = 0;
     __m256 w1, w2, sum, t;
@@ -118,23 +120,27 @@ struct GroupTest {
         w1 = dot(cross(c - a, c + a), ray.dir);
         w2 = dot(cross(a - b, a + b), ray.dir);
         const __m256 zero = _mm256_setzero_ps();
+        sum = _mm256_add_ps(w0, _mm256_add_ps(w1, w2));
+        // tolerance = kEdgeTolerance * |sum| (clearing the sign bit is the absolute value)
+        const __m256 tolerance = _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), sum),
+                                               _mm256_set1_ps(kEdgeTolerance));
         const __m256 min_w = _mm256_min_ps(w0, _mm256_min_ps(w1, w2));
         const __m256 max_w = _mm256_max_ps(w0, _mm256_max_ps(w1, w2));
-        const __m256 same_sign = _mm256_or_ps(_mm256_cmp_ps(min_w, zero, _CMP_GE_OQ),
-                                              _mm256_cmp_ps(max_w, zero, _CMP_LE_OQ));
+        const __m256 same_sign =
+            _mm256_or_ps(_mm256_cmp_ps(min_w, _mm256_sub_ps(zero, tolerance), _CMP_GE_OQ),
+                         _mm256_cmp_ps(max_w, tolerance, _CMP_LE_OQ));
         const unsigned lanes = (1u << count) - 1u;
         mask = unsigned(_mm256_movemask_ps(same_sign)) & lanes;
         if (mask == 0) return;  // the common case: the ray passes beside every triangle
-        sum = _mm256_add_ps(w0, _mm256_add_ps(w1, w2));
         const Vec3x8 normal =
             cross(corners.corner[1] - corners.corner[0], corners.corner[2] - corners.corner[0]);
         const __m256 normal_dot_dir = dot(normal, ray.dir);
         t = _mm256_div_ps(dot(normal, a), normal_dot_dir);
-        const __m256 valid = _mm256_and_ps(
-            _mm256_and_ps(_mm256_cmp_ps(sum, zero, _CMP_NEQ_OQ),
-                          _mm256_cmp_ps(normal_dot_dir, zero, _CMP_NEQ_OQ)),
-            _mm256_and_ps(_mm256_cmp_ps(t, _mm256_set1_ps(tnear), _CMP_GE_OQ),
-                          _mm256_cmp_ps(t, _mm256_set1_ps(tfar), _CMP_LE_OQ)));
+        const __m256 valid =
+            _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(sum, zero, _CMP_NEQ_OQ),
+                                        _mm256_cmp_ps(normal_dot_dir, zero, _CMP_NEQ_OQ)),
+                          _mm256_and_ps(_mm256_cmp_ps(t, _mm256_set1_ps(tnear), _CMP_GE_OQ),
+                                        _mm256_cmp_ps(t, _mm256_set1_ps(tfar), _CMP_LE_OQ)));
         mask &= unsigned(_mm256_movemask_ps(valid));
     }
 };
@@ -207,4 +213,5 @@ inline bool occluded_triangle_group(const TriangleVerts* tris, std::uint32_t cou
 
 #endif
 
+}  // namespace REBRAID_SIMD_NAMESPACE
 }  // namespace rebraid

@@ -1,6 +1,8 @@
 #include "rebraid/rebraid_builder.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
@@ -87,14 +89,24 @@ TEST(RebraidBuilder, OpensWhereInstancesOverlap) {
     EXPECT_EQ(build.budget, 4u * scene.instances.size());
 }
 
-TEST(RebraidBuilder, NoBudgetGivesThePlainTwoLevelTop) {
+TEST(RebraidBuilder, NoBudgetGivesAPlainTwoLevelTop) {
     const Scene scene = make_default_scene();
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
     RebraidBuild rebraided = build_rebraid(scene, bvhs, {.budget_factor = 0.0f});
+    // Without budget nothing opens: one item per instance, at its object root.
+    ASSERT_EQ(rebraided.top.items.size(), scene.instances.size());
+    std::vector<int> seen(scene.instances.size(), 0);
+    for (const TopLevelItem& item : rebraided.top.items) {
+        ++seen[item.instance_id];
+        EXPECT_EQ(item.object_node, bvhs[scene.instances[item.instance_id].mesh_id].root);
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(seen.size()));
+    // The plain builder partitions the same items with its own split search (tiny ranges are
+    // split exhaustively there): the two tops may differ, their SAH barely.
     TopLevelBvh plain = build_two_level(scene, bvhs);
     const InstancedAccel a(scene, bvhs, std::move(rebraided.top), {});
     const InstancedAccel b(scene, bvhs, std::move(plain), {});
-    EXPECT_EQ(a.stats().structure_hash, b.stats().structure_hash);
+    EXPECT_NEAR(*a.stats().sah, *b.stats().sah, 0.02 * *b.stats().sah);
 }
 
 TEST(RebraidBuilder, SingleLeafObjectsAndEmptyMeshes) {

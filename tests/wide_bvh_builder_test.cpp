@@ -4,11 +4,18 @@
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <bit>
+#include <numeric>
 #include <vector>
 
+#include "rebraid/binned_split.h"
 #include "rebraid/error.h"
 #include "rebraid/object_bvh.h"
+#include "rebraid/parallel_partition.h"
+#include "rebraid/random.h"
 #include "rebraid/structure_hash.h"
+#include "rebraid/subset_split.h"
 #include "test_scenes.h"
 
 namespace rebraid {
@@ -103,8 +110,12 @@ TEST(WideBvhBuilder, SameTreeWithOneTwoAndEightThreads) {
         tbb::task_arena arena(threads);
         arena.execute([&] {
             std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
-            // A small threshold makes the parallel paths run even on this modest input.
-            const WideBvh bvh = build_wide_bvh(prims, {.parallel_threshold = 256});
+            // Small thresholds make every parallel path run even on this modest input:
+            // multi-block binning and partitions (ranges of several 4096-prim blocks) and
+            // hundreds of subtree tasks.
+            const WideBvh bvh =
+                build_wide_bvh(prims, {.parallel_threshold = 256, .task_threshold = 64});
+            expect_valid_tree(bvh, prims, BuildSettings{}.max_leaf_size);
             hashes.push_back(tree_hash(bvh, prims));
         });
     }
@@ -112,11 +123,157 @@ TEST(WideBvhBuilder, SameTreeWithOneTwoAndEightThreads) {
     EXPECT_EQ(hashes[0], hashes[2]);
 }
 
+/// Hash of a tree's shape independent of node numbering: child boxes and leaf contents in
+/// depth-first order.
+void add_shape(StructureHash& hash, const WideBvh& bvh, std::span<const BuildPrim> prims,
+               NodeRef ref) {
+    hash.add_value(ref.is_leaf());
+    if (ref.is_leaf()) {
+        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i)
+            hash.add_value(prims[i].id);
+        return;
+    }
+    const WideNode& node = bvh.nodes[ref.node_id()];
+    for (int i = 0; i < node.child_count(); ++i) {
+        hash.add_value(node.child_bounds(i));
+        add_shape(hash, bvh, prims, node.children[i]);
+    }
+}
+
+TEST(WideBvhBuilder, TaskThresholdChangesNumberingOnly) {
+    const Mesh mesh = test::make_triangle_soup(20000, 5);
+    std::vector<std::uint64_t> shapes, hashes;
+    for (std::size_t task_threshold : {std::size_t(16), std::size_t(1) << 30}) {
+        std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
+        const WideBvh bvh = build_wide_bvh(prims, {.task_threshold = task_threshold});
+        StructureHash shape;
+        add_shape(shape, bvh, prims, bvh.root);
+        shapes.push_back(shape.value());
+        hashes.push_back(tree_hash(bvh, prims));
+    }
+    EXPECT_EQ(shapes[0], shapes[1]);
+    EXPECT_NE(hashes[0], hashes[1]) << "one task builds all: expected another numbering";
+}
+
+std::vector<BuildPrim> soup_prims(std::uint32_t count, std::uint64_t seed) {
+    return make_triangle_build_prims(test::make_triangle_soup(count, seed));
+}
+
+/// RangeInfo fields compared exactly (both come from min/max and integer sums).
+void expect_same_info(const RangeInfo& a, const RangeInfo& b) {
+    EXPECT_EQ(a.bounds, b.bounds);
+    EXPECT_EQ(a.centroid_bounds, b.centroid_bounds);
+    EXPECT_EQ(a.weight, b.weight);
+    EXPECT_EQ(a.count, b.count);
+}
+
+/// Checks a partition result against the split's own predicate and compute_range_info.
+void expect_partitioned(std::span<const BuildPrim> prims, const BinnedSplit& split,
+                        const SplitResult& result, std::size_t expected_left) {
+    ASSERT_EQ(result.left_count, expected_left);
+    for (std::size_t i = 0; i < prims.size(); ++i)
+        ASSERT_EQ(split.goes_left(prims[i]), i < result.left_count) << "prim slot " << i;
+    expect_same_info(result.left, compute_range_info(prims.first(result.left_count), 1u << 30));
+    expect_same_info(result.right, compute_range_info(prims.subspan(result.left_count), 1u << 30));
+}
+
+std::vector<std::uint32_t> sorted_ids(std::span<const BuildPrim> prims) {
+    std::vector<std::uint32_t> ids;
+    for (const BuildPrim& prim : prims) ids.push_back(prim.id);
+    std::sort(ids.begin(), ids.end());
+    return ids;
+}
+
+TEST(BinnedSplit, PartitionsAgreeWithGoesLeftAndMeasureBothSides) {
+    const std::vector<BuildPrim> input = soup_prims(30000, 3);
+    const RangeInfo info = compute_range_info(input, 1024);
+    expect_same_info(info, compute_range_info(input, 1u << 30));  // parallel == serial
+    const BinnedSplit split = find_binned_split(input, info, {});
+    ASSERT_TRUE(split.is_valid());
+    const auto expected_left = std::size_t(
+        std::count_if(input.begin(), input.end(), [&](const BuildPrim& p) { return split.goes_left(p); }));
+    ASSERT_GT(expected_left, 0u);
+    ASSERT_LT(expected_left, input.size());
+
+    std::vector<std::vector<std::uint32_t>> left_ids;
+    // Serial and parallel (several blocks), out of place, in place through scratch, and in
+    // place without scratch.
+    for (std::size_t threshold : {std::size_t(1) << 30, std::size_t(64)}) {
+        std::vector<BuildPrim> out(input.size());
+        const SplitResult into = apply_binned_split_into(input, out, split, threshold);
+        expect_partitioned(out, split, into, expected_left);
+        left_ids.push_back(sorted_ids(std::span<const BuildPrim>(out).first(into.left_count)));
+
+        std::vector<BuildPrim> prims = input, scratch(input.size());
+        expect_partitioned(prims, split, apply_binned_split(prims, split, scratch, threshold),
+                           expected_left);
+    }
+    std::vector<BuildPrim> prims = input;
+    expect_partitioned(prims, split, apply_binned_split(prims, split, {}, 1u << 30),
+                       expected_left);
+    EXPECT_EQ(left_ids[0], left_ids[1]);
+}
+
+TEST(ParallelPartition, ParallelPathIsStable) {
+    std::vector<int> values(50000);
+    std::iota(values.begin(), values.end(), 0);
+    Random random(11);
+    for (std::uint32_t i = std::uint32_t(values.size()); i > 1; --i)
+        std::swap(values[i - 1], values[random.next_below(i)]);
+    auto is_small = [](int v) { return v % 7 < 3; };
+    std::vector<int> expected = values;
+    std::stable_partition(expected.begin(), expected.end(), is_small);
+    const std::size_t left = parallel_partition(std::span<int>(values), is_small, 100);
+    EXPECT_EQ(left, std::size_t(std::count_if(expected.begin(), expected.end(), is_small)));
+    EXPECT_EQ(values, expected);
+}
+
+TEST(SubsetSplit, FindsTheCheapestBipartition) {
+    Random random(21);
+    for (int trial = 0; trial < 300; ++trial) {
+        const std::uint32_t n = 2 + random.next_below(kMaxSubsetPrims - 1);
+        std::vector<BuildPrim> prims(n);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const Vec3f p{random.next_float01(), random.next_float01(), random.next_float01()};
+            const Vec3f size{random.next_float(0, 0.5f), random.next_float(0, 0.5f),
+                             random.next_float(0, 0.5f)};
+            prims[i] = {{p, p + size}, i, 1 + random.next_below(3)};
+        }
+        // Brute force over every assignment of prims to two non-empty sides.
+        double cheapest = 1e30;
+        for (std::uint32_t mask = 1; mask + 1 < (1u << n); ++mask) {
+            BBox3f sides[2];
+            double weights[2] = {0, 0};
+            for (std::uint32_t i = 0; i < n; ++i) {
+                const int side = (mask >> i) & 1;
+                sides[side].extend(prims[i].bounds);
+                weights[side] += prims[i].weight;
+            }
+            cheapest = std::min(cheapest, double(sides[0].half_area()) * weights[0] +
+                                              double(sides[1].half_area()) * weights[1]);
+        }
+        const SubsetSplit split = find_subset_split(prims);
+        ASSERT_TRUE(split.is_valid());
+        EXPECT_NEAR(split.cost, cheapest, 1e-5 * cheapest);
+
+        std::vector<BuildPrim> applied = prims;
+        const SplitResult result = apply_subset_split(applied, split);
+        EXPECT_EQ(result.left_count, std::uint32_t(std::popcount(split.left_mask)));
+        expect_same_info(result.left,
+                         compute_range_info(std::span(applied).first(result.left_count), 64));
+        expect_same_info(result.right,
+                         compute_range_info(std::span(applied).subspan(result.left_count), 64));
+        EXPECT_EQ(sorted_ids(applied), sorted_ids(prims));
+    }
+}
+
 TEST(BuildSettings, RejectsOutOfRangeValues) {
     EXPECT_THROW((BuildSettings{.bin_count = 1}.validate()), Error);
     EXPECT_THROW((BuildSettings{.max_leaf_size = 17}.validate()), Error);
     EXPECT_THROW((BuildSettings{.max_leaf_size = 0}.validate()), Error);
     EXPECT_THROW((BuildSettings{.intersection_cost = 0.0f}.validate()), Error);
+    EXPECT_THROW((BuildSettings{.task_threshold = 0}.validate()), Error);
+    EXPECT_THROW((BuildSettings{.prims_per_bin = 0}.validate()), Error);
     EXPECT_NO_THROW(BuildSettings{}.validate());
 }
 

@@ -7,18 +7,48 @@
 #include <vector>
 
 #include "rebraid/accel.h"
+#include "rebraid/object_bvh_set.h"
+#include "rebraid/rebraid_settings.h"
 #include "rebraid/scene.h"
 
 namespace rebraid::cli {
 
 /// The structure every command builds when `--accel` is not given.
-inline constexpr std::string_view kDefaultAccelName = "embree-flat";
+inline constexpr std::string_view kDefaultAccelName = "rebraid";
+
+/// Which builder makes the object BVHs of the project's two-level structures
+/// (`--object-builder`).
+enum class ObjectBuilderKind {
+    own,            ///< the project's parallel binned-SAH builder
+    embree_high,    ///< rtcBuildBVH at high quality with spatial splits
+    embree_medium,  ///< rtcBuildBVH at medium quality (binned SAH)
+};
+
+/// Everything the command line can tell the structures' builders. Structures ignore what does
+/// not concern them (the Embree references and `flat` ignore all of it).
+struct AccelOptions {
+    /// Object BVHs of `twolevel` and `rebraid`.
+    ObjectBuilderKind object_builder = ObjectBuilderKind::own;
+    /// The re-braiding top-level build (`rebraid` only).
+    RebraidSettings rebraid;
+};
+
+/// The `--object-builder` name of `kind` ("own", "embree-high", "embree-medium").
+std::string_view object_builder_name(ObjectBuilderKind kind);
+
+/// Every ObjectBuilderKind, in the order `--help` lists them.
+std::span<const ObjectBuilderKind> object_builder_kinds();
+
+/// The ObjectBvhBuilder `kind` stands for.
+ObjectBvhBuilder make_object_builder(ObjectBuilderKind kind);
 
 /// One structure the command line can build: its `--accel` name and how to build it.
 struct AccelEntry {
     std::string_view name;
     std::string_view description;  ///< one line for `--help`
-    std::unique_ptr<Accel> (*build)(const Scene& scene);
+    std::unique_ptr<Accel> (*build)(const Scene& scene, const AccelOptions& options);
+    /// True when AccelOptions::object_builder changes the structure.
+    bool has_object_bvhs = false;
 };
 
 /// Every structure `--accel` accepts, in the order `--help` lists them.
@@ -34,7 +64,9 @@ std::string accel_names_joined();
 /// Commands call this before loading a scene, so a typo fails fast.
 const AccelEntry& find_accel(std::string_view name);
 
-/// Builds the structure called `name` over `scene`. The scene must outlive the result.
-std::unique_ptr<Accel> build_accel(std::string_view name, const Scene& scene);
+/// Builds the structure called `name` over `scene` with `options` (validated first). The
+/// scene must outlive the result.
+std::unique_ptr<Accel> build_accel(std::string_view name, const Scene& scene,
+                                   const AccelOptions& options = {});
 
 }  // namespace rebraid::cli

@@ -1,6 +1,7 @@
 // Options shared by several subcommands.
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
 #include "accel_factory.h"
 #include "commands.h"
@@ -20,6 +21,40 @@ void add_accel_option(CLI::App& command, std::string& accel_name) {
                     "acceleration structure: " + accel_names_joined() + " (default " +
                         std::string(kDefaultAccelName) + ")")
         ->type_name("NAME");
+}
+
+void add_accel_build_options(CLI::App& command, AccelOptions& options) {
+    std::vector<std::string> names;
+    for (ObjectBuilderKind kind : object_builder_kinds())
+        names.emplace_back(object_builder_name(kind));
+    std::string joined;
+    for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
+    command
+        .add_option_function<std::string>(
+            "--object-builder",
+            [&options](const std::string& name) {
+                for (ObjectBuilderKind kind : object_builder_kinds())
+                    if (object_builder_name(kind) == name) options.object_builder = kind;
+            },
+            "object BVHs of twolevel and rebraid: " + joined + " (default " +
+                std::string(object_builder_name(options.object_builder)) +
+                "); embree-high is rtcBuildBVH with spatial splits, so a triangle may sit in "
+                "several leaves")
+        ->check(CLI::IsMember(names))
+        ->type_name("NAME");
+    command
+        .add_option("--open-threshold", options.rebraid.open_threshold,
+                    "rebraid: open a BRef whose extent along its segment's largest axis exceeds "
+                    "this fraction of the segment's (paper 4.2)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str()
+        ->type_name("X");
+    command
+        .add_option("--budget-factor", options.rebraid.budget_factor,
+                    "rebraid: extra BRefs per instance (paper 5.2; 0 = the plain two-level top)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str()
+        ->type_name("B");
 }
 
 }  // namespace rebraid::cli

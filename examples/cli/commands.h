@@ -9,6 +9,8 @@ class App;
 
 namespace rebraid::cli {
 
+struct AccelOptions;  // accel_factory.h
+
 /// Options every subcommand accepts.
 struct CommonOptions {
     /// Worker threads for TBB; 0 = as many as the machine has.
@@ -25,10 +27,15 @@ void add_common_options(CLI::App& command, CommonOptions& common);
 /// Adds `--accel NAME` to `command`, bound to `accel_name` (help lists the valid names).
 void add_accel_option(CLI::App& command, std::string& accel_name);
 
+/// Adds `--object-builder`, `--open-threshold` and `--budget-factor`, bound to `options`.
+void add_accel_build_options(CLI::App& command, AccelOptions& options);
+
 /// Each registers one subcommand on `app`; when it is chosen, `action` is set to its work.
 void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 void add_stats_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 void add_rays_command(CLI::App& app, CommonOptions& common, CommandAction& action);
+void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& action);
+void add_generate_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 
 }  // namespace rebraid::cli

@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
     add_stats_command(app, common, action);
     add_render_command(app, common, action);
     add_rays_command(app, common, action);
+    add_bench_command(app, common, action);
+    add_generate_command(app, common, action);
 
     try {
         app.parse(argc, argv);

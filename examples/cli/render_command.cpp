@@ -23,6 +23,7 @@ struct RenderOptions {
     std::string scene_path;  ///< empty: the default scene
     std::string image_path = "out/render.png";
     std::string accel_name;
+    AccelOptions accel_options;
     viewer::AoSettings ao;
 };
 
@@ -39,7 +40,8 @@ void run_render(const RenderOptions& options) {
     const Scene scene = load_scene(options.scene_path);
 
     const auto build_start = std::chrono::steady_clock::now();
-    const std::unique_ptr<Accel> accel = build_accel(options.accel_name, scene);
+    const std::unique_ptr<Accel> accel =
+        build_accel(options.accel_name, scene, options.accel_options);
     const double build_ms = milliseconds_since(build_start);
 
     const float aspect = static_cast<float>(options.ao.width) / options.ao.height;
@@ -89,6 +91,7 @@ void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& act
     command->add_option("--seed", options->ao.seed, "seed of the per-pixel samples")
         ->capture_default_str();
     add_accel_option(*command, options->accel_name);
+    add_accel_build_options(*command, options->accel_options);
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_render(*options); }; });
 }

@@ -13,6 +13,7 @@
 #include "accel_factory.h"
 #include "commands.h"
 #include "scene_source.h"
+#include "stats_json.h"
 
 namespace rebraid::cli {
 
@@ -21,44 +22,9 @@ namespace {
 struct StatsOptions {
     std::string scene_path;  ///< empty: the default scene
     std::string accel_name;
+    AccelOptions accel_options;
     bool is_json = false;
 };
-
-/// Calls `visit(key, value)` for every AccelStats field, keys named as the struct's fields.
-/// Optional fields are passed as std::optional; a new field of AccelStats is one line here.
-template <class Visitor>
-void for_each_stats_field(const AccelStats& stats, Visitor&& visit) {
-    visit("triangles", stats.triangles);
-    visit("instances", stats.instances);
-    visit("meshes", stats.meshes);
-    visit("build_ms", stats.build_ms);
-    visit("top_build_ms", stats.top_build_ms);
-    visit("sah", stats.sah);
-    visit("nodes", stats.nodes);
-    visit("leaves", stats.leaves);
-    visit("memory_bytes", stats.memory_bytes);
-    visit("structure_hash", stats.structure_hash);
-    visit("brefs", stats.brefs);
-    visit("budget", stats.budget);
-    visit("opened", stats.opened);
-}
-
-template <class T>
-struct IsOptional : std::false_type {};
-template <class T>
-struct IsOptional<std::optional<T>> : std::true_type {};
-
-nlohmann::ordered_json stats_to_json(const AccelStats& stats) {
-    nlohmann::ordered_json json;
-    for_each_stats_field(stats, [&](std::string_view key, const auto& value) {
-        if constexpr (IsOptional<std::decay_t<decltype(value)>>::value) {
-            if (value) json[std::string(key)] = *value;
-        } else {
-            json[std::string(key)] = value;
-        }
-    });
-    return json;
-}
 
 void print_stats_text(std::ostream& out, const std::string& scene_name,
                       const std::string& accel_name, const AccelStats& stats) {
@@ -84,14 +50,17 @@ void print_stats_text(std::ostream& out, const std::string& scene_name,
 }
 
 void run_stats(const StatsOptions& options) {
-    find_accel(options.accel_name);
+    const AccelEntry& entry = find_accel(options.accel_name);
     const Scene scene = load_scene(options.scene_path);
-    const std::unique_ptr<Accel> accel = build_accel(options.accel_name, scene);
+    const std::unique_ptr<Accel> accel =
+        build_accel(options.accel_name, scene, options.accel_options);
     const AccelStats stats = accel->stats();
     if (options.is_json) {
         nlohmann::ordered_json json;
         json["scene"] = describe_scene(options.scene_path);
         json["accel"] = options.accel_name;
+        if (entry.has_object_bvhs)
+            json["object_builder"] = object_builder_name(options.accel_options.object_builder);
         json.update(stats_to_json(stats));
         std::cout << json.dump(2) << "\n";
     } else {
@@ -112,6 +81,7 @@ void add_stats_command(CLI::App& app, CommonOptions& common, CommandAction& acti
                      "scene file (.gltf/.glb; the default scene when omitted)")
         ->type_name("PATH");
     add_accel_option(*command, options->accel_name);
+    add_accel_build_options(*command, options->accel_options);
     command->add_flag("--json", options->is_json,
                       "print one JSON object (keys as the AccelStats fields, plus scene and "
                       "accel)");

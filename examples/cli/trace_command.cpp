@@ -20,6 +20,7 @@ struct TraceOptions {
     /// One or two positionals: RAYS, or SCENE RAYS (see run_trace).
     std::vector<std::string> paths;
     std::string accel_name;
+    AccelOptions accel_options;
     std::string hits_path;  ///< empty: standard output
 };
 
@@ -42,7 +43,8 @@ void run_trace(const TraceOptions& options) {
     // Read the rays before the (slower) build so a bad ray file fails fast.
     const std::vector<Ray> rays = read_ray_file(rays_path);
     const Scene scene = load_scene(scene_path);
-    const std::unique_ptr<Accel> accel = build_accel(options.accel_name, scene);
+    const std::unique_ptr<Accel> accel =
+        build_accel(options.accel_name, scene, options.accel_options);
 
     // Each ray writes its own slot, so the output order is the input order on any thread count.
     std::vector<Hit> hits(rays.size());
@@ -72,6 +74,7 @@ void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& acti
         ->type_name("");
     command->formatter(std::make_shared<TraceUsageFormatter>());
     add_accel_option(*command, options->accel_name);
+    add_accel_build_options(*command, options->accel_options);
     command->add_option("-o,--output", options->hits_path, "hit file (default: standard output)")
         ->type_name("HITS");
     add_common_options(*command, common);

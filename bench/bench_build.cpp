@@ -1,0 +1,208 @@
+// Build-speed micro-benchmark: the project's own binned-SAH wide-BVH builder against Embree's
+// own scene build (rtcCommitScene, medium quality) on the same world-space triangles, at 1 and
+// 2 threads. Reports Mprims/s (and, for the own builder, the tree's SAH).
+//
+// Usage: bench_build [--scene-dir=DIR] [Google Benchmark flags, e.g.
+//        --benchmark_filter=Own --benchmark_repetitions=3]
+// DIR holds the shared .glb scenes; without the flag, $REBRAID_SHARED_SCENES, then
+// <repo>/../shared/scenes (from this file's path), then ../shared/scenes.
+
+#include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "embree_glue/embree_device.h"
+#include "rebraid/bvh_stats.h"
+#include "rebraid/default_scene.h"
+#include "rebraid/gltf_scene.h"
+#include "rebraid/object_bvh.h"
+#include "rebraid/scene.h"
+#include "rebraid/wide_bvh_builder.h"
+
+namespace {
+
+std::string g_scene_dir;
+
+std::string default_scene_dir() {
+    if (const char* env = std::getenv("REBRAID_SHARED_SCENES"); env && *env) return env;
+    // Ninja and Make pass absolute source paths, so __FILE__ locates the repository.
+    const std::filesystem::path from_source =
+        std::filesystem::path(__FILE__).parent_path().parent_path() / ".." / "shared" / "scenes";
+    if (std::filesystem::is_directory(from_source)) return from_source.lexically_normal();
+    return "../shared/scenes";
+}
+
+/// Every instance's triangles transformed to world space as one mesh (what FlatAccel builds).
+rebraid::Mesh flatten(const rebraid::Scene& scene) {
+    rebraid::Mesh world;
+    world.name = "world";
+    for (const rebraid::Instance& instance : scene.instances) {
+        const rebraid::Mesh& mesh = scene.meshes[instance.mesh_id];
+        const auto base = std::uint32_t(world.positions.size());
+        for (const rebraid::Vec3f& p : mesh.positions)
+            world.positions.push_back(instance.object_to_world.transform_point(p));
+        for (const rebraid::Triangle& t : mesh.triangles)
+            world.triangles.push_back({base + t[0], base + t[1], base + t[2]});
+    }
+    return world;
+}
+
+/// World meshes by scene name, loaded on first use (the scene-dir flag is parsed by then).
+const rebraid::Mesh& world_mesh(const std::string& name) {
+    static std::map<std::string, rebraid::Mesh> cache;
+    auto it = cache.find(name);
+    if (it != cache.end()) return it->second;
+    const rebraid::Scene scene = name == "default"
+                                     ? rebraid::make_default_scene()
+                                     : rebraid::load_gltf_scene(g_scene_dir + "/" + name);
+    return cache.emplace(name, flatten(scene)).first->second;
+}
+
+void set_mprims_counter(benchmark::State& state, std::size_t prims) {
+    state.counters["Mprims/s"] = benchmark::Counter(
+        double(prims) * double(state.iterations()) * 1e-6, benchmark::Counter::kIsRate);
+    state.counters["prims"] = double(prims);
+}
+
+/// build_object_bvh: build prims, tree, triangles copied into leaf order (manual time: the
+/// SAH computed for the counter and freeing the BVH are excluded, as they are for Embree).
+void own_object_build(benchmark::State& state, const std::string& scene) {
+    const rebraid::Mesh* mesh = nullptr;
+    try {
+        mesh = &world_mesh(scene);
+    } catch (const std::exception& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                std::size_t(state.range(0)));
+    double sah = 0.0;
+    for (auto _ : state) {
+        const auto start = std::chrono::steady_clock::now();
+        rebraid::ObjectBvh bvh = rebraid::build_object_bvh(*mesh);
+        const auto stop = std::chrono::steady_clock::now();
+        state.SetIterationTime(std::chrono::duration<double>(stop - start).count());
+        sah = rebraid::object_bvh_sah(bvh);
+    }
+    set_mprims_counter(state, mesh->triangles.size());
+    state.counters["sah"] = sah;
+}
+
+/// build_wide_bvh alone, on prepared build prims (manual time: the copy is excluded).
+void own_tree_build(benchmark::State& state, const std::string& scene) {
+    const rebraid::Mesh* mesh = nullptr;
+    try {
+        mesh = &world_mesh(scene);
+    } catch (const std::exception& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                std::size_t(state.range(0)));
+    const std::vector<rebraid::BuildPrim> source = rebraid::make_triangle_build_prims(*mesh);
+    std::vector<rebraid::BuildPrim> prims;
+    for (auto _ : state) {
+        prims = source;
+        const auto start = std::chrono::steady_clock::now();
+        rebraid::WideBvh bvh = rebraid::build_wide_bvh(prims, {});
+        const auto stop = std::chrono::steady_clock::now();
+        benchmark::DoNotOptimize(bvh.nodes.data());
+        state.SetIterationTime(std::chrono::duration<double>(stop - start).count());
+    }
+    set_mprims_counter(state, mesh->triangles.size());
+}
+
+/// rtcCommitScene of one triangle geometry holding the world mesh (manual time: filling
+/// Embree's buffers is excluded, the commit builds Embree's prim refs, BVH and leaves).
+void embree_scene_build(benchmark::State& state, const std::string& scene) {
+    const rebraid::Mesh* mesh = nullptr;
+    try {
+        mesh = &world_mesh(scene);
+    } catch (const std::exception& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    const int thread_count = int(state.range(0));
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                std::size_t(thread_count));
+    rebraid::glue::EmbreeDevice device("threads=" + std::to_string(thread_count));
+    for (auto _ : state) {
+        RTCScene rtc_scene = rtcNewScene(device.get());
+        rtcSetSceneBuildQuality(rtc_scene, RTC_BUILD_QUALITY_MEDIUM);
+        RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+        // Embree-allocated buffers are padded for its 16-byte vertex loads; copy into them.
+        void* vertices =
+            rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                    sizeof(rebraid::Vec3f), mesh->positions.size());
+        std::memcpy(vertices, mesh->positions.data(),
+                    mesh->positions.size() * sizeof(rebraid::Vec3f));
+        void* indices =
+            rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                    sizeof(rebraid::Triangle), mesh->triangles.size());
+        std::memcpy(indices, mesh->triangles.data(),
+                    mesh->triangles.size() * sizeof(rebraid::Triangle));
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometry(rtc_scene, geometry);
+        rtcReleaseGeometry(geometry);
+        const auto start = std::chrono::steady_clock::now();
+        rtcCommitScene(rtc_scene);
+        const auto stop = std::chrono::steady_clock::now();
+        state.SetIterationTime(std::chrono::duration<double>(stop - start).count());
+        rtcReleaseScene(rtc_scene);
+        try {
+            device.throw_if_error("rtcCommitScene");
+        } catch (const std::exception& e) {
+            state.SkipWithError(e.what());
+            return;
+        }
+    }
+    set_mprims_counter(state, mesh->triangles.size());
+}
+
+void register_benchmarks() {
+    for (const char* scene : {"default", "cg57_cruiser.glb"}) {
+        const std::string name = scene;
+        benchmark::RegisterBenchmark(("OwnObjectBuild/" + name).c_str(),
+                                     [name](benchmark::State& s) { own_object_build(s, name); })
+            ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime();
+        benchmark::RegisterBenchmark(("OwnTreeBuild/" + name).c_str(),
+                                     [name](benchmark::State& s) { own_tree_build(s, name); })
+            ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime();
+        benchmark::RegisterBenchmark(("EmbreeSceneBuild/" + name).c_str(),
+                                     [name](benchmark::State& s) { embree_scene_build(s, name); })
+            ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime();
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    g_scene_dir = default_scene_dir();
+    for (int i = 1; i < argc; ++i) {
+        constexpr const char* kFlag = "--scene-dir=";
+        if (std::strncmp(argv[i], kFlag, std::strlen(kFlag)) == 0) {
+            g_scene_dir = argv[i] + std::strlen(kFlag);
+        } else if (std::strcmp(argv[i], "--scene-dir") == 0 && i + 1 < argc) {
+            g_scene_dir = argv[++i];
+        } else {
+            std::fprintf(stderr, "bench_build: unknown argument '%s' (expected --scene-dir=DIR)\n",
+                         argv[i]);
+            return 1;
+        }
+    }
+    register_benchmarks();
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

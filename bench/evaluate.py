@@ -1,0 +1,140 @@
+#!/usr/bin/env python3
+"""The paper's evaluation on our scenes, from `rebraid bench --json` runs.
+
+  evaluate.py tables SCENE... [--rays N]   Table 1 (SAH, Mrays/s, ratios to twolevel) and
+                                           Table 2 (full and top-level build times) as Markdown
+  evaluate.py sweep SCENE... --plot P.png  Figure 4: SAH and Mrays/s against open_threshold
+                                           and against the budget factor, and a plot
+
+Every number comes from one `rebraid bench` run per scene (and per setting in the sweep), so
+the structures of a table are measured on the same rays in the same process.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DEFAULT_BINARY = os.path.join(HERE, "..", "build", "examples", "rebraid")
+ACCELS = ["embree-flat", "embree-instanced", "flat", "twolevel", "rebraid"]
+THRESHOLDS = [0.0, 0.025, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0]
+BUDGETS = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0]
+
+
+def bench(binary, scene, accels, rays, repetitions, extra=()):
+    command = [binary, "bench", scene, "--accel", ",".join(accels), "--rays", str(rays),
+               "--repetitions", str(repetitions), "--json", *extra]
+    print("$ " + " ".join(command), file=sys.stderr)
+    result = subprocess.run(command, check=True, capture_output=True, text=True)
+    return json.loads(result.stdout)
+
+
+def name_of(scene):
+    return os.path.splitext(os.path.basename(scene))[0]
+
+
+def ratio(value, reference):
+    return f"{value / reference:.2f}x" if value and reference else "-"
+
+
+def tables(args):
+    rows = []
+    for scene in args.scenes:
+        rows += bench(args.binary, scene, ACCELS, args.rays, args.repetitions)
+    print("### Table 1: SAH and Mrays/s (ratios to twolevel)\n")
+    print("| scene | accel | SAH | SAH / twolevel | Mrays/s primary | / twolevel | Mrays/s diffuse | / twolevel |")
+    print("|---|---|---|---|---|---|---|---|")
+    for scene in args.scenes:
+        group = [r for r in rows if r["scene"] == os.path.basename(scene) or r["scene"] == scene]
+        two = next(r for r in group if r["accel"] == "twolevel")
+        for r in group:
+            sah = r.get("sah")
+            print(f"| {name_of(scene)} | {r['accel']} | {sah:.2f} | {ratio(sah, two['sah'])} | "
+                  f"{r['mrays_primary']:.2f} | {ratio(r['mrays_primary'], two['mrays_primary'])} | "
+                  f"{r['mrays_diffuse']:.2f} | {ratio(r['mrays_diffuse'], two['mrays_diffuse'])} |"
+                  if sah is not None else
+                  f"| {name_of(scene)} | {r['accel']} | - | - | "
+                  f"{r['mrays_primary']:.2f} | {ratio(r['mrays_primary'], two['mrays_primary'])} | "
+                  f"{r['mrays_diffuse']:.2f} | {ratio(r['mrays_diffuse'], two['mrays_diffuse'])} |")
+    print("\n### Table 2: build times in ms (full build; top level only)\n")
+    print("| scene | embree-flat | embree-instanced | flat | twolevel | twolevel top | rebraid | rebraid top | rebraid top / twolevel top | BRefs (budget) | nodes twolevel / rebraid |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for scene in args.scenes:
+        group = {r["accel"]: r for r in rows if r["scene"] in (os.path.basename(scene), scene)}
+        two, reb = group["twolevel"], group["rebraid"]
+        print(f"| {name_of(scene)} | {group['embree-flat']['build_ms']:.1f} | "
+              f"{group['embree-instanced']['build_ms']:.1f} | {group['flat']['build_ms']:.1f} | "
+              f"{two['build_ms']:.1f} | {two['top_build_ms']:.2f} | {reb['build_ms']:.1f} | "
+              f"{reb['top_build_ms']:.2f} | {ratio(reb['top_build_ms'], two['top_build_ms'])} | "
+              f"{reb['brefs']} ({reb['instances'] + reb['budget']}) | {two['nodes']} / {reb['nodes']} |")
+    if args.json:
+        with open(args.json, "w") as out:
+            json.dump(rows, out, indent=1)
+
+
+def sweep(args):
+    results = {"threshold": {}, "budget": {}}
+    for scene in args.scenes:
+        name = name_of(scene)
+        results["threshold"][name] = [
+            (t, bench(args.binary, scene, ["rebraid"], args.rays, args.repetitions,
+                      ["--open-threshold", str(t)])[0]) for t in THRESHOLDS]
+        results["budget"][name] = [
+            (b, bench(args.binary, scene, ["rebraid"], args.rays, args.repetitions,
+                      ["--budget-factor", str(b)])[0]) for b in BUDGETS]
+    for kind, label in (("threshold", "open_threshold"), ("budget", "budget factor")):
+        print(f"\n### Figure 4 data: SAH and diffuse Mrays/s against {label}\n")
+        values = THRESHOLDS if kind == "threshold" else BUDGETS
+        print("| scene | " + " | ".join(f"{v:g}" for v in values) + " |")
+        print("|---|" + "---|" * len(values))
+        for name, points in results[kind].items():
+            print(f"| {name} SAH | " + " | ".join(f"{p['sah']:.2f}" for _, p in points) + " |")
+            print(f"| {name} Mrays/s | " + " | ".join(f"{p['mrays_diffuse']:.2f}" for _, p in points) + " |")
+    if args.json:
+        with open(args.json, "w") as out:
+            json.dump(results, out, indent=1)
+    if args.plot:
+        plot(results, args.plot)
+
+
+def plot(results, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(2, 2, figsize=(11, 8))
+    for column, (kind, label, default) in enumerate(
+            (("threshold", "open_threshold", 0.1), ("budget", "budget factor (extra BRefs per instance)", 4.0))):
+        for name, points in results[kind].items():
+            xs = [x for x, _ in points]
+            reference = next(p for x, p in points if x == default)
+            axes[0][column].plot(xs, [p["sah"] / reference["sah"] for _, p in points], marker="o", label=name)
+            axes[1][column].plot(xs, [p["mrays_diffuse"] / reference["mrays_diffuse"] for _, p in points],
+                                 marker="o", label=name)
+        axes[0][column].set_ylabel(f"SAH / SAH at {default:g}")
+        axes[1][column].set_ylabel(f"diffuse Mrays/s / at {default:g}")
+        for row in range(2):
+            axes[row][column].set_xlabel(label)
+            axes[row][column].grid(alpha=0.3)
+    axes[0][0].legend(fontsize=8)
+    figure.suptitle("rebraid: SAH and diffuse-ray speed against the opening threshold and the budget")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    print(f"\nwrote {path}", file=sys.stderr)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("mode", choices=["tables", "sweep"])
+    parser.add_argument("scenes", nargs="+", help="scene files, or 'default'")
+    parser.add_argument("--binary", default=DEFAULT_BINARY, help="the rebraid command")
+    parser.add_argument("--rays", type=int, default=230400)
+    parser.add_argument("--repetitions", type=int, default=5)
+    parser.add_argument("--json", help="also write the raw results here")
+    parser.add_argument("--plot", help="sweep: write the plot here (needs python3-matplotlib)")
+    args = parser.parse_args()
+    (tables if args.mode == "tables" else sweep)(args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,224 @@
+// `rebraid bench [SCENE...] --accel LIST`: per scene, build each structure and measure build
+// time, SAH and closest-hit Mrays/s on the same primary and diffuse-bounce rays.
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "accel_factory.h"
+#include "bench_rays.h"
+#include "commands.h"
+#include "embree_glue/embree_reference.h"
+#include "scene_source.h"
+#include "stats_json.h"
+
+namespace rebraid::cli {
+
+namespace {
+
+/// A SCENE argument naming the built-in default scene, so it can be listed among files.
+constexpr const char* kDefaultSceneToken = "default";
+
+struct BenchOptions {
+    std::vector<std::string> scene_paths;  ///< none: the default scene
+    std::vector<std::string> accel_names = cli::accel_names();
+    AccelOptions accel_options;
+    BenchRaySettings rays;
+    int repetitions = 5;
+    bool is_json = false;
+};
+
+/// Closest-hit throughput of one structure on one ray set.
+struct TraceTiming {
+    double mrays_per_second = 0.0;
+    std::size_t hit_count = 0;
+};
+
+/// Traces `rays` (closest hit, Accel::intersect) in parallel once to warm up (caches, page
+/// faults, TBB's workers), then `repetitions` times; the median time gives the rate.
+TraceTiming time_closest_hits(const Accel& accel, const std::vector<Ray>& rays, int repetitions) {
+    if (rays.empty()) return {};
+    std::vector<Hit> hits(rays.size());  // written, so no trace can be optimised away
+    const auto trace_once = [&] {
+        const auto start = std::chrono::steady_clock::now();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 64),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              for (std::size_t i = range.begin(); i != range.end(); ++i)
+                                  hits[i] = accel.intersect(rays[i]);
+                          });
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    trace_once();
+    std::vector<double> seconds;
+    for (int i = 0; i < repetitions; ++i) seconds.push_back(trace_once());
+    std::sort(seconds.begin(), seconds.end());
+    const std::size_t middle = seconds.size() / 2;
+    const double median =
+        seconds.size() % 2 == 1 ? seconds[middle] : 0.5 * (seconds[middle - 1] + seconds[middle]);
+    TraceTiming timing;
+    timing.mrays_per_second = static_cast<double>(rays.size()) / std::max(median, 1e-9) / 1e6;
+    timing.hit_count = static_cast<std::size_t>(
+        std::count_if(hits.begin(), hits.end(), [](const Hit& hit) { return hit.is_hit(); }));
+    return timing;
+}
+
+/// What one structure measured on one scene.
+struct BenchResult {
+    std::string scene;
+    const AccelEntry* entry = nullptr;
+    AccelStats stats;
+    TraceTiming primary, diffuse;
+};
+
+std::size_t active_thread_count() {
+    return tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+}
+
+nlohmann::ordered_json result_to_json(const BenchResult& result, const BenchRays& rays,
+                                      const BenchOptions& options) {
+    nlohmann::ordered_json json;
+    json["scene"] = result.scene;
+    json["accel"] = result.entry->name;
+    if (result.entry->has_object_bvhs)
+        json["object_builder"] = object_builder_name(options.accel_options.object_builder);
+    json.update(stats_to_json(result.stats));
+    if (!result.stats.sah) json["sah"] = nullptr;  // Embree's own BVHs are not inspectable
+    json["mrays_primary"] = result.primary.mrays_per_second;
+    json["mrays_diffuse"] = result.diffuse.mrays_per_second;
+    json["rays_primary"] = rays.primary.size();
+    json["rays_diffuse"] = rays.diffuse.size();
+    json["hits_primary"] = result.primary.hit_count;
+    json["hits_diffuse"] = result.diffuse.hit_count;
+    json["threads"] = active_thread_count();
+    json["repetitions"] = options.repetitions;
+    return json;
+}
+
+void print_scene_header(const std::string& scene_name, const Scene& scene, const BenchRays& rays,
+                        const BenchOptions& options) {
+    std::printf(
+        "%s: %llu triangles, %zu instances, %zu meshes; %zu primary rays (%dx%d, %zu hit) and "
+        "%zu diffuse rays; %zu threads; Mrays/s from the median of %d runs after 1 warm-up\n",
+        scene_name.c_str(), static_cast<unsigned long long>(scene.instanced_triangle_count()),
+        scene.instances.size(), scene.meshes.size(), rays.primary.size(), rays.image_width,
+        rays.image_height, rays.primary_hit_count, rays.diffuse.size(), active_thread_count(),
+        options.repetitions);
+    std::printf("  %-18s %10s %10s %8s %10s %10s %10s %10s\n", "accel", "build_ms", "top_ms", "sah",
+                "nodes", "memory_MB", "Mrays_pri", "Mrays_dif");
+}
+
+void print_result_row(const BenchResult& result, const BenchOptions& options) {
+    const AccelStats& stats = result.stats;
+    std::string name(result.entry->name);
+    if (result.entry->has_object_bvhs &&
+        options.accel_options.object_builder != ObjectBuilderKind::own)
+        name += "/" + std::string(object_builder_name(options.accel_options.object_builder));
+    const auto optional_number = [](auto value, const char* format) {
+        if (!value) return std::string("-");
+        char text[32];
+        std::snprintf(text, sizeof text, format, static_cast<double>(*value));
+        return std::string(text);
+    };
+    std::optional<double> memory_mb;
+    if (stats.memory_bytes) memory_mb = static_cast<double>(*stats.memory_bytes) / (1 << 20);
+    std::printf("  %-18s %10.1f %10s %8s %10s %10s %10.2f %10.2f\n", name.c_str(), stats.build_ms,
+                optional_number(stats.top_build_ms, "%.1f").c_str(),
+                optional_number(stats.sah, "%.2f").c_str(),
+                optional_number(stats.nodes, "%.0f").c_str(),
+                optional_number(memory_mb, "%.1f").c_str(), result.primary.mrays_per_second,
+                result.diffuse.mrays_per_second);
+    std::fflush(stdout);
+}
+
+void run_bench(const BenchOptions& options) {
+    // Check every name and setting before the first (slow) scene load.
+    std::vector<const AccelEntry*> entries;
+    for (const std::string& name : options.accel_names) entries.push_back(&find_accel(name));
+    options.accel_options.rebraid.validate();
+
+    std::vector<std::string> scene_paths = options.scene_paths;
+    if (scene_paths.empty()) scene_paths.emplace_back();
+    for (std::string& path : scene_paths)
+        if (path == kDefaultSceneToken) path.clear();  // load_scene's name for it
+    nlohmann::ordered_json all_results = nlohmann::ordered_json::array();
+    for (const std::string& path : scene_paths) {
+        const Scene scene = load_scene(path);
+        const std::string scene_name = describe_scene(path);
+        BenchRays rays;
+        {
+            // Embree's instanced scene finds the hit points: it fits in memory for every
+            // scene, even those whose flattened form does not.
+            const glue::EmbreeInstancedAccel reference(scene);
+            rays = make_bench_rays(scene, reference, options.rays);
+        }
+        if (!options.is_json) print_scene_header(scene_name, scene, rays, options);
+        for (const AccelEntry* entry : entries) {
+            BenchResult result{scene_name, entry, {}, {}, {}};
+            {
+                const std::unique_ptr<Accel> accel =
+                    build_accel(entry->name, scene, options.accel_options);
+                result.stats = accel->stats();
+                result.primary = time_closest_hits(*accel, rays.primary, options.repetitions);
+                result.diffuse = time_closest_hits(*accel, rays.diffuse, options.repetitions);
+            }  // freed before the next structure is built
+            if (options.is_json)
+                all_results.push_back(result_to_json(result, rays, options));
+            else
+                print_result_row(result, options);
+        }
+    }
+    if (options.is_json) std::cout << all_results.dump(2) << "\n";
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& action) {
+    auto options = std::make_shared<BenchOptions>();
+    CLI::App* command = app.add_subcommand(
+        "bench",
+        "Per scene, build each structure and measure, on the same rays, its build time, SAH and "
+        "closest-hit Mrays/s for primary camera rays and for incoherent diffuse-bounce rays.");
+    command
+        ->add_option("SCENE", options->scene_paths,
+                     "scene files (.gltf/.glb); 'default' names the built-in default scene, "
+                     "which is also used when no scene is given")
+        ->type_name("PATH...");
+    std::string default_accels;
+    for (const std::string& name : options->accel_names)
+        default_accels += (default_accels.empty() ? "" : ",") + name;
+    command
+        ->add_option("--accel", options->accel_names,
+                     "comma-separated structures, from: " + accel_names_joined() + " (default " +
+                         default_accels + ")")
+        ->delimiter(',')
+        ->type_name("LIST");
+    command
+        ->add_option("--rays", options->rays.ray_count,
+                     "primary rays, one per pixel of a 16:9 image; as many diffuse rays")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 30))
+        ->capture_default_str()
+        ->type_name("N");
+    command
+        ->add_option("--repetitions", options->repetitions,
+                     "timed runs per ray set after one warm-up; the median counts")
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
+    command->add_option("--seed", options->rays.seed, "seed of the diffuse directions")
+        ->capture_default_str();
+    command->add_flag("--json", options->is_json,
+                      "print one JSON array: an object per scene and structure (scene, accel, "
+                      "build_ms, sah, mrays_primary, mrays_diffuse, the stats fields, ...)");
+    add_accel_build_options(*command, options->accel_options);
+    add_common_options(*command, common);
+    command->callback([options, &action] { action = [options] { run_bench(*options); }; });
+}
+
+}  // namespace rebraid::cli

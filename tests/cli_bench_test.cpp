@@ -1,0 +1,165 @@
+// End-to-end tests of `rebraid bench`: tiny runs of the built binary, checking its JSON and
+// table output.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+    int exit_code = -1;
+    std::string out;  ///< standard output
+    std::string err;  ///< standard error
+};
+
+std::string read_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+std::string shell_quote(const std::string& text) {
+    std::string quoted = "'";
+    for (char c : text) quoted += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
+/// Runs the rebraid binary with `arguments`, capturing both output streams in a folder of
+/// the running test's own (ctest may run tests in parallel).
+CommandResult run_rebraid(std::initializer_list<std::string> arguments) {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const fs::path dir = fs::path(REBRAID_TEST_TMP) / "cli_bench_test" /
+                         (std::string(info->test_suite_name()) + "." + info->name());
+    fs::create_directories(dir);
+    std::string command = shell_quote(REBRAID_CLI);
+    for (const std::string& argument : arguments) {
+        command += ' ';
+        command += shell_quote(argument);
+    }
+    command += " >";
+    command += shell_quote((dir / "stdout.txt").string());
+    command += " 2>";
+    command += shell_quote((dir / "stderr.txt").string());
+    const int status = std::system(command.c_str());
+    CommandResult result;
+    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+    result.out = read_file(dir / "stdout.txt");
+    result.err = read_file(dir / "stderr.txt");
+    return result;
+}
+
+std::string shared_scene(const char* file) {
+    return std::string(REBRAID_SHARED_SCENES) + "/" + file;
+}
+
+/// The structures issue 4 and 5 require `rebraid bench` to run by default.
+const std::vector<std::string> kRequiredAccels{"embree-flat", "embree-instanced", "flat",
+                                               "twolevel", "rebraid"};
+
+TEST(CliBench, JsonHasOneObjectPerSceneAndStructureWithEveryKey) {
+    const std::string small = shared_scene("motion_capture_rom.glb");
+    const std::string dragon = shared_scene("chinese_dragon.glb");
+    const CommandResult result = run_rebraid({"bench", small, dragon, "--rays", "600",
+                                              "--repetitions", "1", "--json", "--threads", "2"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const nlohmann::json json = nlohmann::json::parse(result.out);  // throws on extra text
+    ASSERT_TRUE(json.is_array());
+    ASSERT_EQ(json.size(), 2 * kRequiredAccels.size()) << result.out;
+
+    std::map<std::string, std::set<std::string>> accels_per_scene;
+    std::map<std::string, std::uint64_t> embree_flat_hits;
+    for (const nlohmann::json& row : json) {
+        for (const char* key :
+             {"scene", "accel", "build_ms", "sah", "mrays_primary", "mrays_diffuse", "rays_primary",
+              "rays_diffuse", "hits_primary", "triangles", "instances"})
+            ASSERT_TRUE(row.contains(key)) << key << " missing in " << row.dump();
+        const std::string scene = row.at("scene").get<std::string>();
+        const std::string accel = row.at("accel").get<std::string>();
+        EXPECT_TRUE(accels_per_scene[scene].insert(accel).second) << accel << " twice";
+        EXPECT_EQ(row.at("rays_primary").get<std::uint64_t>(), 600u);
+        EXPECT_EQ(row.at("rays_diffuse").get<std::uint64_t>(), 600u);
+        EXPECT_GT(row.at("mrays_primary").get<double>(), 0.0) << accel;
+        EXPECT_GT(row.at("mrays_diffuse").get<double>(), 0.0) << accel;
+        EXPECT_GE(row.at("build_ms").get<double>(), 0.0) << accel;
+        EXPECT_EQ(row.at("threads").get<int>(), 2);
+        const bool is_embree = accel.rfind("embree-", 0) == 0;
+        // Embree's BVHs cannot be inspected: their SAH is null; the project's are >= 1.
+        if (is_embree)
+            EXPECT_TRUE(row.at("sah").is_null()) << accel;
+        else
+            EXPECT_GE(row.at("sah").get<double>(), 1.0) << accel;
+        const bool is_two_level = accel == "twolevel" || accel == "rebraid";
+        EXPECT_EQ(row.contains("top_build_ms"), is_two_level) << accel;
+        EXPECT_EQ(row.contains("object_builder"), is_two_level) << accel;
+        if (!is_embree) {
+            EXPECT_TRUE(row.contains("nodes")) << accel;
+        }
+        if (accel == "embree-flat") embree_flat_hits[scene] = row.at("hits_primary");
+    }
+    ASSERT_EQ(accels_per_scene.size(), 2u);
+    for (const auto& [scene, accels] : accels_per_scene)
+        EXPECT_EQ(accels, std::set<std::string>(kRequiredAccels.begin(), kRequiredAccels.end()))
+            << scene;
+    // Every structure traces the same rays: primary hit counts agree up to edge grazes.
+    for (const nlohmann::json& row : json) {
+        const auto expected = double(embree_flat_hits.at(row.at("scene")));
+        EXPECT_GT(expected, 0.0);
+        EXPECT_NEAR(row.at("hits_primary").get<double>(), expected, 0.01 * 600) << row.at("accel");
+    }
+}
+
+TEST(CliBench, TableListsTheChosenStructuresWithTheirBuilder) {
+    const CommandResult result = run_rebraid(
+        {"bench", shared_scene("motion_capture_rom.glb"), "--rays", "300", "--repetitions", "1",
+         "--accel", "flat,twolevel", "--object-builder", "embree-medium"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_NE(result.out.find("motion_capture_rom.glb"), std::string::npos) << result.out;
+    EXPECT_NE(result.out.find("\n  flat "), std::string::npos) << result.out;
+    EXPECT_NE(result.out.find("twolevel/embree-medium"), std::string::npos) << result.out;
+    EXPECT_EQ(result.out.find("embree-flat"), std::string::npos) << result.out;
+    EXPECT_EQ(result.out.find("rebraid "), std::string::npos) << result.out;
+}
+
+TEST(CliBench, ObjectBuilderAndRebraidSettingsReachTheJson) {
+    const CommandResult result =
+        run_rebraid({"bench", shared_scene("motion_capture_rom.glb"), "--rays", "200",
+                     "--repetitions", "1", "--accel", "rebraid", "--object-builder", "embree-high",
+                     "--budget-factor", "0", "--json"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const nlohmann::json json = nlohmann::json::parse(result.out);
+    ASSERT_EQ(json.size(), 1u);
+    EXPECT_EQ(json[0].at("object_builder"), "embree-high");
+    // Budget factor 0: nothing may be opened.
+    ASSERT_TRUE(json[0].contains("opened")) << json.dump();
+    EXPECT_EQ(json[0].at("opened").get<std::uint64_t>(), 0u);
+}
+
+TEST(CliBench, UnknownStructureFailsBeforeLoadingAnything) {
+    const CommandResult result =
+        run_rebraid({"bench", "/no/such/scene.glb", "--accel", "flat,no-such-bvh"});
+    EXPECT_EQ(result.exit_code, 1);
+    EXPECT_NE(result.err.find("unknown accel 'no-such-bvh'"), std::string::npos) << result.err;
+    EXPECT_EQ(result.err.find("scene.glb"), std::string::npos) << result.err;
+}
+
+TEST(CliBench, BadValuesAreParseErrors) {
+    EXPECT_NE(run_rebraid({"bench", "--rays", "0"}).exit_code, 0);
+    EXPECT_NE(run_rebraid({"bench", "--repetitions", "0"}).exit_code, 0);
+    EXPECT_NE(run_rebraid({"bench", "--object-builder", "nope"}).exit_code, 0);
+    EXPECT_NE(run_rebraid({"bench", "--open-threshold", "-1"}).exit_code, 0);
+}
+
+}  // namespace
