@@ -5,6 +5,7 @@
                                            Table 2 (full and top-level build times) as Markdown
   evaluate.py sweep SCENE... --plot P.png  Figure 4: SAH and Mrays/s against open_threshold
                                            and against the budget factor, and a plot
+  evaluate.py plot --json SWEEP.json --plot P.png   the plot again from a sweep's raw results
 
 Every number comes from one `rebraid bench` run per scene (and per setting in the sweep), so
 the structures of a table are measured on the same rays in the same process.
@@ -39,16 +40,18 @@ def ratio(value, reference):
 
 
 def tables(args):
-    rows = []
-    for scene in args.scenes:
-        rows += bench(args.binary, scene, ACCELS, args.rays, args.repetitions)
+    # One bench run per scene: its rows, keyed by accel.
+    runs = [(scene, {r["accel"]: r for r in bench(args.binary, scene, ACCELS, args.rays,
+                                                   args.repetitions)}) for scene in args.scenes]
+    if args.json:
+        with open(args.json, "w") as out:
+            json.dump([r for _, group in runs for r in group.values()], out, indent=1)
     print("### Table 1: SAH and Mrays/s (ratios to twolevel)\n")
     print("| scene | accel | SAH | SAH / twolevel | Mrays/s primary | / twolevel | Mrays/s diffuse | / twolevel |")
     print("|---|---|---|---|---|---|---|---|")
-    for scene in args.scenes:
-        group = [r for r in rows if r["scene"] == os.path.basename(scene) or r["scene"] == scene]
-        two = next(r for r in group if r["accel"] == "twolevel")
-        for r in group:
+    for scene, group in runs:
+        two = group["twolevel"]
+        for r in group.values():
             sah = r.get("sah")
             print(f"| {name_of(scene)} | {r['accel']} | {sah:.2f} | {ratio(sah, two['sah'])} | "
                   f"{r['mrays_primary']:.2f} | {ratio(r['mrays_primary'], two['mrays_primary'])} | "
@@ -60,17 +63,13 @@ def tables(args):
     print("\n### Table 2: build times in ms (full build; top level only)\n")
     print("| scene | embree-flat | embree-instanced | flat | twolevel | twolevel top | rebraid | rebraid top | rebraid top / twolevel top | BRefs (budget) | nodes twolevel / rebraid |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for scene in args.scenes:
-        group = {r["accel"]: r for r in rows if r["scene"] in (os.path.basename(scene), scene)}
+    for scene, group in runs:
         two, reb = group["twolevel"], group["rebraid"]
         print(f"| {name_of(scene)} | {group['embree-flat']['build_ms']:.1f} | "
               f"{group['embree-instanced']['build_ms']:.1f} | {group['flat']['build_ms']:.1f} | "
               f"{two['build_ms']:.1f} | {two['top_build_ms']:.2f} | {reb['build_ms']:.1f} | "
               f"{reb['top_build_ms']:.2f} | {ratio(reb['top_build_ms'], two['top_build_ms'])} | "
               f"{reb['brefs']} ({reb['instances'] + reb['budget']}) | {two['nodes']} / {reb['nodes']} |")
-    if args.json:
-        with open(args.json, "w") as out:
-            json.dump(rows, out, indent=1)
 
 
 def sweep(args):
@@ -125,15 +124,19 @@ def plot(results, path):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("mode", choices=["tables", "sweep"])
-    parser.add_argument("scenes", nargs="+", help="scene files, or 'default'")
+    parser.add_argument("mode", choices=["tables", "sweep", "plot"])
+    parser.add_argument("scenes", nargs="*", help="scene files, or 'default'")
     parser.add_argument("--binary", default=DEFAULT_BINARY, help="the rebraid command")
     parser.add_argument("--rays", type=int, default=230400)
     parser.add_argument("--repetitions", type=int, default=5)
     parser.add_argument("--json", help="also write the raw results here")
     parser.add_argument("--plot", help="sweep: write the plot here (needs python3-matplotlib)")
     args = parser.parse_args()
-    (tables if args.mode == "tables" else sweep)(args)
+    if args.mode == "plot":
+        with open(args.json) as raw:
+            plot(json.load(raw), args.plot)
+    else:
+        (tables if args.mode == "tables" else sweep)(args)
 
 
 if __name__ == "__main__":
