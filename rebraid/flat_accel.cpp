@@ -90,9 +90,10 @@ Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) co
     // leaf are asked for as the leaf is stacked or visited.
     const InstanceId* instances = triangle_instance_.data();
     const PrimId* prims = triangle_prim_.data();
-    const auto prefetch_ids = [instances, prims](std::uint32_t first, std::uint32_t count) {
-        prefetch_range(instances + first, count);
-        prefetch_range(prims + first, count);
+    const auto prefetch_ids = [instances, prims](std::uint32_t first, std::uint32_t) {
+        // A leaf's ids (4 bytes a triangle) nearly always share the line of its first one.
+        __builtin_prefetch(instances + first);
+        __builtin_prefetch(prims + first);
     };
     if (intersect_object_bvh_leaf_order(bvh_, bvh_.root, traversal_ray, hit, counters,
                                         prefetch_ids)) {

@@ -71,8 +71,9 @@ inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalR
                                  TraversalCounters* counters) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids.data();
-    const auto prefetch_prim_ids = [prim_ids](std::uint32_t first, std::uint32_t count) {
-        prefetch_range(prim_ids + first, count);
+    const auto prefetch_prim_ids = [prim_ids](std::uint32_t first, std::uint32_t) {
+        // A leaf's primIDs (4 bytes a triangle) nearly always share the line of its first one.
+        __builtin_prefetch(prim_ids + first);
     };
     if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,
                                          prefetch_prim_ids))
