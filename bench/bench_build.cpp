@@ -174,13 +174,25 @@ void register_benchmarks() {
         const std::string name = scene;
         benchmark::RegisterBenchmark(("OwnObjectBuild/" + name).c_str(),
                                      [name](benchmark::State& s) { own_object_build(s, name); })
-            ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime();
+            ->Arg(1)
+            ->Arg(2)
+            ->ArgName("threads")
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime();
         benchmark::RegisterBenchmark(("OwnTreeBuild/" + name).c_str(),
                                      [name](benchmark::State& s) { own_tree_build(s, name); })
-            ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime();
+            ->Arg(1)
+            ->Arg(2)
+            ->ArgName("threads")
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime();
         benchmark::RegisterBenchmark(("EmbreeSceneBuild/" + name).c_str(),
                                      [name](benchmark::State& s) { embree_scene_build(s, name); })
-            ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime();
+            ->Arg(1)
+            ->Arg(2)
+            ->ArgName("threads")
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime();
     }
 }
 

@@ -25,8 +25,8 @@ struct BinMapping {
     __m128 twice_origin, half_scale, last_bin;
 
     BinMapping(Vec3f origin, Vec3f scale, std::uint32_t bin_count)
-        : twice_origin(_mm_setr_ps(origin.x + origin.x, origin.y + origin.y, origin.z + origin.z,
-                                   0.0f)),
+        : twice_origin(
+              _mm_setr_ps(origin.x + origin.x, origin.y + origin.y, origin.z + origin.z, 0.0f)),
           half_scale(_mm_setr_ps(scale.x * 0.5f, scale.y * 0.5f, scale.z * 0.5f, 0.0f)),
           last_bin(_mm_set1_ps(float(bin_count - 1))) {}
 
@@ -142,21 +142,6 @@ void bin_serially(std::span<const BuildPrim> prims, const BinMapping& mapping, B
         bins.add(prims, mapping);
         return;
     }
-    if (prims.size() >= 1024) {
-        BinStorage s1(bin_count), s2(bin_count), s3(bin_count);
-        BinView b1 = s1.view(), b2 = s2.view(), b3 = s3.view();
-        b1.clear(); b2.clear(); b3.clear();
-        std::size_t i = 0;
-        for (; i + 3 < prims.size(); i += 4) {
-            bins.add(prims[i], mapping);
-            b1.add(prims[i + 1], mapping);
-            b2.add(prims[i + 2], mapping);
-            b3.add(prims[i + 3], mapping);
-        }
-        for (; i < prims.size(); ++i) bins.add(prims[i], mapping);
-        bins.merge(b1); bins.merge(b2); bins.merge(b3);
-        return;
-    }
     BinStorage odd_storage(bin_count);
     BinView odd = odd_storage.view();
     odd.clear();
@@ -172,8 +157,7 @@ void fill_bins(std::span<const BuildPrim> prims, const BinMapping& mapping, BinV
         bin_serially(prims, mapping, bins, bin_count);
         return;
     }
-    const std::size_t block_count =
-        std::min(kMaxBinBlocks, (prims.size() + kBlock - 1) / kBlock);
+    const std::size_t block_count = std::min(kMaxBinBlocks, (prims.size() + kBlock - 1) / kBlock);
     const std::size_t block_size = (prims.size() + block_count - 1) / block_count;
     std::vector<Bin> storage(block_count * 3 * bin_count);
     tbb::parallel_for(std::size_t(0), block_count, [&](std::size_t b) {
@@ -242,6 +226,16 @@ struct GoesLeft {
     }
 };
 
+/// BinnedSplit::goes_left of an exact split, for a fixed axis.
+template <int kAxis>
+struct GoesBelow {
+    float twice_centre_below;
+
+    bool operator()(const BuildPrim& prim) const {
+        return prim.bounds.min[kAxis] + prim.bounds.max[kAxis] < twice_centre_below;
+    }
+};
+
 SplitResult to_split_result(const PartitionResult<RangeAccumulator>& partition) {
     return {std::uint32_t(partition.left_count), partition.left.to_info(),
             partition.right.to_info()};
@@ -251,6 +245,17 @@ SplitResult to_split_result(const PartitionResult<RangeAccumulator>& partition) 
 /// loop reads its coordinate directly.
 template <class Partition>
 SplitResult with_axis_predicate(const BinnedSplit& split, Partition partition) {
+    if (split.is_exact()) {
+        const float below = split.twice_centre_below;
+        switch (split.axis) {
+            case 0:
+                return to_split_result(partition(GoesBelow<0>{below}));
+            case 1:
+                return to_split_result(partition(GoesBelow<1>{below}));
+            default:
+                return to_split_result(partition(GoesBelow<2>{below}));
+        }
+    }
     const float twice_origin = split.origin + split.origin, half_scale = split.scale * 0.5f;
     const float bin = float(split.bin);
     switch (split.axis) {
@@ -273,21 +278,21 @@ RangeInfo compute_range_info(std::span<const BuildPrim> prims, std::size_t paral
     // Min/max and integer sums are exact, so any division of the work gives the same result.
     if (prims.size() < parallel_threshold)
         return accumulate({0, prims.size()}, RangeAccumulator{}).to_info();
-    return tbb::parallel_reduce(
-               tbb::blocked_range<std::size_t>(0, prims.size(), kBlock), RangeAccumulator{},
-               accumulate,
-               [](RangeAccumulator a, const RangeAccumulator& b) {
-                   a.merge(b);
-                   return a;
-               })
+    return tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, prims.size(), kBlock),
+                                RangeAccumulator{}, accumulate,
+                                [](RangeAccumulator a, const RangeAccumulator& b) {
+                                    a.merge(b);
+                                    return a;
+                                })
         .to_info();
 }
 
 BinnedSplit find_binned_split(std::span<const BuildPrim> prims, const RangeInfo& info,
                               const BuildSettings& settings) {
+    if (prims.size() <= kMaxExactSplitPrims) return find_exact_split(prims);
     // Small ranges get fewer bins: clearing and sweeping them dominates their cost.
-    const std::uint32_t bin_count = std::min(
-        {settings.bin_count, kMaxBins, std::max(info.count / settings.prims_per_bin, 4u)});
+    const std::uint32_t bin_count =
+        std::min({settings.bin_count, kMaxBins, std::max(info.count / settings.prims_per_bin, 4u)});
     const Vec3f extent = info.centroid_bounds.extent();
     // Bins slightly narrower than extent / bin_count so the largest centroid lands in the
     // last bin rather than one past it. Axes without extent get scale 0: all in bin 0.
@@ -313,6 +318,8 @@ BinnedSplit find_binned_split(std::span<const BuildPrim> prims, const RangeInfo&
 
 SplitResult apply_binned_split(std::span<BuildPrim> prims, const BinnedSplit& split,
                                std::span<BuildPrim> scratch, std::size_t parallel_threshold) {
+    if (split.is_exact() && prims.size() <= kMaxExactSplitPrims)
+        return apply_exact_split(prims, split);
     return with_axis_predicate(split, [&](auto goes_left) {
         return partition_summarized<RangeAccumulator>(prims, goes_left, parallel_threshold,
                                                       scratch);

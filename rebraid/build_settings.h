@@ -17,8 +17,9 @@ struct BuildSettings {
     float traversal_cost = 1.0f;
     /// SAH cost of one primitive test.
     float intersection_cost = 1.0f;
-    /// Ranges with fewer primitives are built by one task, serially (binning, partitioning
-    /// and recursion); the tree does not depend on this value or the thread count.
+    /// Ranges with fewer primitives are binned and partitioned serially, larger ones in
+    /// parallel blocks. The prim order within the tree (and, through ties and index splits,
+    /// rarely its shape) depends on this value; nothing depends on the thread count.
     std::size_t parallel_threshold = 8192;
     /// Subtrees of at least this many primitives are built as their own TBB task; smaller
     /// ones by their parent's task. Lower than `parallel_threshold` because a task costs far

@@ -54,23 +54,6 @@ void summarize(Summary& summary, const T* items, std::size_t begin, std::size_t 
     summary.merge(local);
 }
 
-/// Branch-free Lomuto partition in place: every element is swapped with the first right
-/// element and the boundary advances when it went left. A branch per element would be
-/// mispredicted about half the time, which costs more than the unconditional swap.
-template <class T, class Predicate>
-std::size_t partition_in_place(T* items, std::size_t count, Predicate goes_left) {
-    std::size_t left = 0;
-    alignas(T) unsigned char item[sizeof(T)];
-    for (std::size_t i = 0; i < count; ++i) {
-        const bool is_left = goes_left(items[i]);
-        std::memcpy(item, static_cast<const void*>(items + i), sizeof(T));
-        copy_element(items + i, items + left);
-        std::memcpy(static_cast<void*>(items + left), item, sizeof(T));
-        left += is_left;
-    }
-    return left;
-}
-
 /// Branch-free partition of in[0, count) into out[0, count): left elements forward from the
 /// front, right ones backward from the back (so the right side comes out reversed). The
 /// destination is selected, not branched to.
@@ -152,8 +135,7 @@ PartitionResult<Summary> partition_summarized_into(std::span<const T> in, std::s
         const std::size_t right_offset = left_total + (begin - block.left_offset);
         scatter(in.data() + begin, end - begin, out.data() + block.left_offset,
                 out.data() + right_offset, goes_left);
-        summarize(block.left, out.data(), block.left_offset,
-                  block.left_offset + block.left_count);
+        summarize(block.left, out.data(), block.left_offset, block.left_offset + block.left_count);
         summarize(block.right, out.data(), right_offset,
                   right_offset + (end - begin - block.left_count));
     });
@@ -165,23 +147,29 @@ PartitionResult<Summary> partition_summarized_into(std::span<const T> in, std::s
     return result;
 }
 
-/// In-place form of partition_summarized_into: with `scratch` (at least items.size()
-/// elements, contents ignored) it partitions into scratch and copies back; without, only
-/// allowed below `parallel_threshold`, it runs a serial in-place partition. Either way the
-/// result depends only on the input and the threshold, never on the thread count.
+/// In-place form of partition_summarized_into, with the same result order: partitions into
+/// `scratch` (at least items.size() elements, contents ignored) and copies back; without
+/// scratch it partitions from a temporary copy of the input instead. The result depends only on the
+/// input and the threshold, never on the thread count.
 template <class Summary, class T, class Predicate>
 PartitionResult<Summary> partition_summarized(std::span<T> items, Predicate goes_left,
                                               std::size_t parallel_threshold,
                                               std::span<T> scratch) {
     static_assert(std::is_trivially_copyable_v<T>);
-    using namespace partition_detail;
     const std::size_t n = items.size();
     if (scratch.size() < n) {
-        PartitionResult<Summary> result;
-        result.left_count = partition_in_place(items.data(), n, goes_left);
-        summarize(result.left, items.data(), 0, result.left_count);
-        summarize(result.right, items.data(), result.left_count, n);
-        return result;
+        // Small ranges (the common case) copy to the stack, larger ones to the heap.
+        constexpr std::size_t kStackBytes = 4096;
+        alignas(T) unsigned char stack_copy[kStackBytes];
+        std::unique_ptr<unsigned char[]> heap_copy;
+        unsigned char* bytes = stack_copy;
+        if (n * sizeof(T) > kStackBytes) {
+            heap_copy = std::make_unique_for_overwrite<unsigned char[]>(n * sizeof(T));
+            bytes = heap_copy.get();
+        }
+        std::memcpy(bytes, static_cast<const void*>(items.data()), n * sizeof(T));
+        const std::span<const T> copy(reinterpret_cast<const T*>(bytes), n);
+        return partition_summarized_into<Summary>(copy, items, goes_left, parallel_threshold);
     }
     const std::span<T> out = scratch.first(n);
     PartitionResult<Summary> result = partition_summarized_into<Summary>(
@@ -209,17 +197,13 @@ struct NoSummary {
 };
 
 /// Moves the elements for which `goes_left` holds to the front and returns how many there
-/// are (partition_summarized without summaries, with its own scratch space above the
-/// threshold). The result depends only on the input and `parallel_threshold`, never on the
-/// thread count or timing.
+/// are (partition_summarized without summaries or scratch), in the order of
+/// partition_summarized_into. The result depends only on the input and
+/// `parallel_threshold`, never on the thread count or timing.
 template <class T, class Predicate>
 std::size_t parallel_partition(std::span<T> items, Predicate goes_left,
                                std::size_t parallel_threshold) {
-    std::unique_ptr<T[]> scratch;
-    if (items.size() >= parallel_threshold) scratch = std::make_unique<T[]>(items.size());
-    return partition_summarized<NoSummary>(
-               items, goes_left, parallel_threshold,
-               std::span<T>(scratch.get(), scratch ? items.size() : 0))
+    return partition_summarized<NoSummary>(items, goes_left, parallel_threshold, std::span<T>())
         .left_count;
 }
 

@@ -13,19 +13,17 @@
 #include "rebraid/binned_split.h"
 #include "rebraid/build_scratch.h"
 #include "rebraid/error.h"
-#include "rebraid/subset_split.h"
 
 namespace rebraid {
 namespace {
 
-/// A range of prims considered as one child of the node being built, with its best split:
-/// every bipartition tried for tiny ranges, a binned one otherwise, neither when only an
-/// index split can make progress.
+/// A range of prims considered as one child of the node being built, with its best split
+/// (invalid when only an index split can make progress).
 struct Candidate {
     std::uint32_t begin = 0, end = 0;
     RangeInfo info;
-    BinnedSplit binned;
-    SubsetSplit subset;
+    float area = 0.0f;  ///< info.bounds.half_area(), which node growth compares often
+    BinnedSplit split;
     bool is_leaf = true;
     /// Which buffer holds the range's prims: binned splits partition from one buffer into
     /// the other (the caller's array or the scratch), which saves copying back every time.
@@ -90,32 +88,19 @@ public:
     /// `median_only`: skip the SAH search and split ranges by index (bounds the tree depth).
     Candidate evaluate(std::uint32_t begin, std::uint32_t end, bool in_scratch,
                        const RangeInfo& info, bool median_only) const {
-        Candidate c{begin, end, info, {}, {}, true, in_scratch};
+        Candidate c{begin, end, info, info.bounds.half_area(), {}, true, in_scratch};
         const std::uint32_t n = c.size();
         if (n <= 1) return c;
-        float split_sah = 0.0f;  // A_L W_L + A_R W_R of the split found
-        bool has_split = false;
-        if (median_only) {
-            // no SAH search
-        } else if (n <= kMaxSubsetPrims) {
-            c.subset = find_subset_split(range(c));
-            has_split = c.subset.is_valid();
-            split_sah = c.subset.cost;
-        } else {
-            c.binned = find_binned_split(range(c), info, settings_);
-            has_split = c.binned.is_valid();
-            split_sah = c.binned.cost;
-        }
-        if (!has_split) {
+        if (!median_only) c.split = find_binned_split(range(c), info, settings_);
+        if (!c.split.is_valid()) {
             // Every centroid coincides (or the depth limit holds): only an index split can
             // make progress.
             c.is_leaf = n <= settings_.max_leaf_size;
             return c;
         }
-        const float area = info.bounds.half_area();
-        const float leaf_cost = settings_.intersection_cost * area * float(info.weight);
+        const float leaf_cost = settings_.intersection_cost * c.area * float(info.weight);
         const float split_cost =
-            settings_.traversal_cost * area + settings_.intersection_cost * split_sah;
+            settings_.traversal_cost * c.area + settings_.intersection_cost * c.split.cost;
         c.is_leaf = n <= settings_.max_leaf_size && leaf_cost <= split_cost;
         return c;
     }
@@ -123,14 +108,18 @@ public:
     std::array<Candidate, 2> split(const Candidate& c, bool median_only) const {
         SplitResult s;
         bool in_scratch = c.in_scratch;
-        if (c.subset.is_valid()) {
-            s = apply_subset_split(range(c), c.subset);  // in place: a few prims
-        } else if (c.binned.is_valid()) {
-            // Into the other buffer; the partition measures both sides on the way, so the
-            // children need no extra pass either.
-            in_scratch = !c.in_scratch;
-            s = apply_binned_split_into(range(c), range(c.begin, c.end, in_scratch), c.binned,
-                                        settings_.parallel_threshold);
+        if (c.split.is_valid()) {
+            // The partition measures both sides on the way: the children need no extra
+            // pass. Large ranges go into the other buffer (no copying back), the tiny ranges
+            // of exact splits stay in place (switching buffers buys them nothing). Both give
+            // the same order as apply_binned_split, which other builders use.
+            if (c.split.is_exact() && c.size() <= kMaxExactSplitPrims) {
+                s = apply_exact_split(range(c), c.split);
+            } else {
+                in_scratch = !c.in_scratch;
+                s = apply_binned_split_into(range(c), range(c.begin, c.end, in_scratch), c.split,
+                                            settings_.parallel_threshold);
+            }
         }
         // Binning and partition map centroids identically, so neither side is empty; should
         // one be, the index split below still makes progress.
@@ -183,8 +172,8 @@ public:
             int pick = -1;
             float largest = -1.0f;
             for (int i = 0; i < kid_count; ++i)
-                if (!kids[i].is_leaf && kids[i].info.bounds.half_area() > largest) {
-                    largest = kids[i].info.bounds.half_area();
+                if (!kids[i].is_leaf && kids[i].area > largest) {
+                    largest = kids[i].area;
                     pick = i;
                 }
             if (pick < 0) break;
@@ -212,9 +201,8 @@ public:
         for (int i = 0; i < last_task; ++i) {
             if (!own_chunk[i]) continue;
             if (!tasks) tasks.emplace();
-            tasks->run([this, &kid = kids[i], depth, sub = own_chunk[i]] {
-                build(kid, depth + 1, *sub);
-            });
+            tasks->run(
+                [this, &kid = kids[i], depth, sub = own_chunk[i]] { build(kid, depth + 1, *sub); });
         }
         for (int i = 0; i < kid_count; ++i) {
             const Candidate& kid = kids[i];

@@ -15,7 +15,6 @@
 #include "rebraid/parallel_partition.h"
 #include "rebraid/random.h"
 #include "rebraid/structure_hash.h"
-#include "rebraid/subset_split.h"
 #include "test_scenes.h"
 
 namespace rebraid {
@@ -190,8 +189,8 @@ TEST(BinnedSplit, PartitionsAgreeWithGoesLeftAndMeasureBothSides) {
     expect_same_info(info, compute_range_info(input, 1u << 30));  // parallel == serial
     const BinnedSplit split = find_binned_split(input, info, {});
     ASSERT_TRUE(split.is_valid());
-    const auto expected_left = std::size_t(
-        std::count_if(input.begin(), input.end(), [&](const BuildPrim& p) { return split.goes_left(p); }));
+    const auto expected_left = std::size_t(std::count_if(
+        input.begin(), input.end(), [&](const BuildPrim& p) { return split.goes_left(p); }));
     ASSERT_GT(expected_left, 0u);
     ASSERT_LT(expected_left, input.size());
 
@@ -209,8 +208,7 @@ TEST(BinnedSplit, PartitionsAgreeWithGoesLeftAndMeasureBothSides) {
                            expected_left);
     }
     std::vector<BuildPrim> prims = input;
-    expect_partitioned(prims, split, apply_binned_split(prims, split, {}, 1u << 30),
-                       expected_left);
+    expect_partitioned(prims, split, apply_binned_split(prims, split, {}, 1u << 30), expected_left);
     EXPECT_EQ(left_ids[0], left_ids[1]);
 }
 
@@ -228,43 +226,56 @@ TEST(ParallelPartition, ParallelPathIsStable) {
     EXPECT_EQ(values, expected);
 }
 
-TEST(SubsetSplit, FindsTheCheapestBipartition) {
+TEST(BinnedSplit, SmallRangesGetTheCheapestPlaneSplit) {
     Random random(21);
-    for (int trial = 0; trial < 300; ++trial) {
-        const std::uint32_t n = 2 + random.next_below(kMaxSubsetPrims - 1);
+    int splits_checked = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const std::uint32_t n = 2 + random.next_below(kMaxExactSplitPrims - 1);
         std::vector<BuildPrim> prims(n);
         for (std::uint32_t i = 0; i < n; ++i) {
-            const Vec3f p{random.next_float01(), random.next_float01(), random.next_float01()};
-            const Vec3f size{random.next_float(0, 0.5f), random.next_float(0, 0.5f),
-                             random.next_float(0, 0.5f)};
+            // Coarse positions, so that some centroids coincide on some axes.
+            const Vec3f p{float(random.next_below(4)), float(random.next_below(4)),
+                          float(random.next_below(4))};
+            const Vec3f size{random.next_float(0, 2), random.next_float(0, 2),
+                             random.next_float(0, 2)};
             prims[i] = {{p, p + size}, i, 1 + random.next_below(3)};
         }
-        // Brute force over every assignment of prims to two non-empty sides.
+        // Brute force: every assignment of the prims to two non-empty sides whose centroids
+        // an axis-aligned plane separates.
         double cheapest = 1e30;
         for (std::uint32_t mask = 1; mask + 1 < (1u << n); ++mask) {
-            BBox3f sides[2];
+            BBox3f sides[2], centres[2];
             double weights[2] = {0, 0};
             for (std::uint32_t i = 0; i < n; ++i) {
                 const int side = (mask >> i) & 1;
                 sides[side].extend(prims[i].bounds);
+                centres[side].extend(prims[i].centroid());
                 weights[side] += prims[i].weight;
             }
-            cheapest = std::min(cheapest, double(sides[0].half_area()) * weights[0] +
-                                              double(sides[1].half_area()) * weights[1]);
+            bool separated = false;
+            for (int a = 0; a < 3; ++a)
+                separated = separated || centres[0].max[a] < centres[1].min[a] ||
+                            centres[1].max[a] < centres[0].min[a];
+            if (separated)
+                cheapest = std::min(cheapest, double(sides[0].half_area()) * weights[0] +
+                                                  double(sides[1].half_area()) * weights[1]);
         }
-        const SubsetSplit split = find_subset_split(prims);
-        ASSERT_TRUE(split.is_valid());
+        const RangeInfo info = compute_range_info(prims, 64);
+        const BinnedSplit split = find_binned_split(prims, info, {});
+        ASSERT_EQ(split.is_valid(), cheapest < 1e30);
+        if (!split.is_valid()) continue;
+        ++splits_checked;
+        EXPECT_TRUE(split.is_exact());
         EXPECT_NEAR(split.cost, cheapest, 1e-5 * cheapest);
 
         std::vector<BuildPrim> applied = prims;
-        const SplitResult result = apply_subset_split(applied, split);
-        EXPECT_EQ(result.left_count, std::uint32_t(std::popcount(split.left_mask)));
-        expect_same_info(result.left,
-                         compute_range_info(std::span(applied).first(result.left_count), 64));
-        expect_same_info(result.right,
-                         compute_range_info(std::span(applied).subspan(result.left_count), 64));
+        const SplitResult result = apply_binned_split(applied, split, {}, 1u << 30);
+        const auto expected_left = std::size_t(std::count_if(
+            prims.begin(), prims.end(), [&](const BuildPrim& p) { return split.goes_left(p); }));
+        expect_partitioned(applied, split, result, expected_left);
         EXPECT_EQ(sorted_ids(applied), sorted_ids(prims));
     }
+    EXPECT_GT(splits_checked, 300);
 }
 
 TEST(BuildSettings, RejectsOutOfRangeValues) {
