@@ -368,7 +368,9 @@ TEST(GltfWriter, RejectsWhatGltfCannotHold) {
 /// Runs the rebraid binary with `arguments` (already shell-safe); returns its exit code and
 /// writes its standard output and error to `output`.
 int run_rebraid(const std::string& arguments, std::string& output) {
-    const fs::path capture = scratch_path("command_output.txt");
+    // One capture file per test: ctest runs the tests of this file in parallel processes.
+    const fs::path capture = scratch_path(
+        std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + ".out");
     const std::string command =
         std::string("'") + REBRAID_CLI + "' " + arguments + " >'" + capture.string() + "' 2>&1";
     const int status = std::system(command.c_str());
