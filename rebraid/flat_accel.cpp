@@ -2,8 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include <chrono>
-
+#include "rebraid/build_timer.h"
 #include "rebraid/bvh_stats.h"
 #include "rebraid/huge_pages.h"
 #include "rebraid/object_traversal.h"
@@ -71,12 +70,11 @@ void renumber_in_leaf_order(ObjectBvh& bvh, std::vector<InstanceId>& triangle_in
 
 FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
     scene.validate();
-    const auto start = std::chrono::steady_clock::now();
+    const BuildTimer timer;
     const Mesh world = make_world_mesh(scene, triangle_instance_, triangle_prim_);
     bvh_ = build_object_bvh(world, settings);
     renumber_in_leaf_order(bvh_, triangle_instance_, triangle_prim_);
-    build_info_.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    build_info_.build_ms = timer.elapsed_ms();
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
     build_info_.meshes = scene.meshes.size();

@@ -1,9 +1,9 @@
 #include "rebraid/instanced_accel.h"
 
-#include <chrono>
 #include <optional>
 #include <span>
 
+#include "rebraid/build_timer.h"
 #include "rebraid/bvh_stats.h"
 #include "rebraid/object_traversal.h"
 #include "rebraid/structure_hash.h"
@@ -129,12 +129,11 @@ AccelStats InstancedAccel::stats() const {
 InstancedAccel build_two_level_accel(const Scene& scene, const ObjectBvhBuilder& object_builder,
                                      const BuildSettings& top_settings) {
     scene.validate();
-    const auto start = std::chrono::steady_clock::now();
+    const BuildTimer timer;
     std::vector<ObjectBvh> object_bvhs = build_object_bvhs(scene, object_builder);
     TopLevelBvh top = build_two_level(scene, object_bvhs, top_settings);
     AccelStats info;
-    info.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    info.build_ms = timer.elapsed_ms();
     info.top_build_ms = top.build_ms;
     return InstancedAccel(scene, std::move(object_bvhs), std::move(top), info);
 }

@@ -2,8 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include <chrono>
-
+#include "rebraid/build_timer.h"
 #include "rebraid/huge_pages.h"
 
 namespace rebraid {
@@ -49,14 +48,13 @@ ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> le
 }
 
 ObjectBvh build_object_bvh(const Mesh& mesh, const BuildSettings& settings) {
-    const auto start = std::chrono::steady_clock::now();
+    const BuildTimer timer;
     std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
     WideBvh tree = build_wide_bvh(prims, settings);
     std::vector<PrimId> leaf_prims(prims.size());
     for (std::size_t i = 0; i < prims.size(); ++i) leaf_prims[i] = prims[i].id;
     ObjectBvh bvh = make_object_bvh(mesh, std::move(tree), std::move(leaf_prims));
-    bvh.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    bvh.build_ms = timer.elapsed_ms();
     return bvh;
 }
 

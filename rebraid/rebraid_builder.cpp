@@ -4,7 +4,6 @@
 
 #include <array>
 #include <atomic>
-#include <chrono>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,6 +12,7 @@
 #include "rebraid/bref.h"
 #include "rebraid/bref_budget.h"
 #include "rebraid/bref_opening.h"
+#include "rebraid/build_timer.h"
 #include "rebraid/error.h"
 #include "rebraid/parallel_partition.h"
 #include "rebraid/rebraid_termination.h"
@@ -61,8 +61,8 @@ public:
                 }
             }
         }
-        RebraidCandidate c{segment, info ? *info : compute_range_info(range(segment), threshold),
-                           {}, true};
+        RebraidCandidate c{
+            segment, info ? *info : compute_range_info(range(segment), threshold), {}, true};
         const std::uint32_t n = segment.size();
         if (n <= 1) return c;
         if (!median_only) c.split = find_binned_split(range(segment), c.info, settings_.build);
@@ -161,10 +161,10 @@ void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
 RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                            const RebraidSettings& settings) {
     settings.validate();
-    const auto start = std::chrono::steady_clock::now();
+    const BuildTimer timer;
     if (object_bvhs.size() != scene.meshes.size())
-        throw Error("build_rebraid: " + std::to_string(object_bvhs.size()) +
-                    " object BVHs for " + std::to_string(scene.meshes.size()) + " meshes");
+        throw Error("build_rebraid: " + std::to_string(object_bvhs.size()) + " object BVHs for " +
+                    std::to_string(scene.meshes.size()) + " meshes");
     std::vector<std::uint32_t> instance_mesh(scene.instances.size());
     std::vector<AffineTransform> object_to_world(scene.instances.size());
     std::uint64_t seed_count = 0, primitive_count = 0;
@@ -181,9 +181,10 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
     RebraidBuild result;
     const std::uint64_t limit = NodeRef::kMaxFirst;
     if (seed_count > limit)
-        throw Error("build_rebraid: " + std::to_string(seed_count) + " instances exceed the limit of " +
-                    std::to_string(limit));
-    result.budget = std::min(bref_budget(settings, seed_count, primitive_count), limit - seed_count);
+        throw Error("build_rebraid: " + std::to_string(seed_count) +
+                    " instances exceed the limit of " + std::to_string(limit));
+    result.budget =
+        std::min(bref_budget(settings, seed_count, primitive_count), limit - seed_count);
     const auto capacity = std::uint32_t(seed_count + result.budget);
     std::vector<BuildPrim> prims(capacity);
     std::vector<BRefTarget> targets(capacity);
@@ -209,9 +210,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
     emit_items(top, prims, targets);
     result.brefs = top.items.size();
     result.opened = policy.opened();
-    top.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
+    top.build_ms = timer.elapsed_ms();
     return result;
 }
 
@@ -219,13 +218,11 @@ InstancedAccel build_rebraid_accel(const Scene& scene, const ObjectBvhBuilder& o
                                    const RebraidSettings& settings) {
     scene.validate();
     settings.validate();
-    const auto start = std::chrono::steady_clock::now();
+    const BuildTimer timer;
     std::vector<ObjectBvh> object_bvhs = build_object_bvhs(scene, object_builder);
     RebraidBuild build = build_rebraid(scene, object_bvhs, settings);
     AccelStats info;
-    info.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
+    info.build_ms = timer.elapsed_ms();
     info.top_build_ms = build.top.build_ms;
     info.brefs = build.brefs;
     info.budget = build.budget;

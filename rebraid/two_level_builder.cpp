@@ -1,8 +1,8 @@
 #include "rebraid/two_level_builder.h"
 
-#include <chrono>
 #include <string>
 
+#include "rebraid/build_timer.h"
 #include "rebraid/error.h"
 #include "rebraid/wide_bvh_builder.h"
 
@@ -32,7 +32,7 @@ TopLevelBvh build_top_level_over_items(std::vector<TopLevelItem> items,
 
 TopLevelBvh build_two_level(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                             const BuildSettings& settings) {
-    const auto start = std::chrono::steady_clock::now();
+    const BuildTimer timer;
     if (object_bvhs.size() != scene.meshes.size())
         throw Error("build_two_level: " + std::to_string(object_bvhs.size()) + " object BVHs for " +
                     std::to_string(scene.meshes.size()) + " meshes");
@@ -52,8 +52,7 @@ TopLevelBvh build_two_level(const Scene& scene, std::span<const ObjectBvh> objec
     }
     TopLevelBvh top =
         build_top_level_over_items(std::move(items), std::move(bounds), prim_counts, settings);
-    top.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    top.build_ms = timer.elapsed_ms();
     return top;
 }
 
