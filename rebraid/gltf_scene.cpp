@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "rebraid/error.h"
+#include "rebraid/gltf_accessor.h"
 
 namespace rebraid {
 namespace {
@@ -46,23 +47,6 @@ struct Affine3d {
     }
 };
 
-/// Where an accessor's elements are: `count` elements, `stride` bytes apart, from `first`.
-struct ElementRange {
-    const unsigned char* first = nullptr;
-    std::uint64_t count = 0;
-    std::uint64_t stride = 0;
-};
-
-/// True when `count` elements of `element_size` bytes, `stride` apart, starting at `offset`,
-/// fit in `length` bytes. Written with divisions so huge declared counts cannot overflow.
-bool elements_fit(std::uint64_t offset, std::uint64_t count, std::uint64_t stride,
-                  std::uint64_t element_size, std::uint64_t length) {
-    if (offset > length) return false;
-    if (count == 0) return true;
-    if (element_size > length - offset) return false;
-    return (count - 1) <= (length - offset - element_size) / stride;
-}
-
 /// Number text for messages (std::to_string prints 1e-40 as 0.000000).
 std::string format_number(double value) {
     char text[32];
@@ -95,13 +79,14 @@ public:
         } catch (const Error& error) {
             fail(error.what());
         }
+        if (options_.keep_model)
+            result_.model = std::make_shared<const tinygltf::Model>(std::move(model_));
         return std::move(result_);
     }
 
 private:
-    [[noreturn]] void fail(const std::string& what) const {
-        throw Error("load_gltf_scene: '" + path_ + "': " + what);
-    }
+    std::string error_prefix() const { return "load_gltf_scene: '" + path_ + "': "; }
+    [[noreturn]] void fail(const std::string& what) const { throw Error(error_prefix() + what); }
 
     std::string mesh_label(std::size_t m) const {
         return "mesh " + std::to_string(m) + " ('" + model_.meshes[m].name + "')";
@@ -188,46 +173,8 @@ private:
 
     // ---- Accessors ---------------------------------------------------------------------------
 
-    /// Resolves accessor `id` to its bytes after checking it and its bufferView lie inside
-    /// their buffer. `role` names the use for messages ("POSITION of mesh 2 ('x') primitive 0").
-    ElementRange resolve_accessor(int id, const std::string& role) const {
-        if (id < 0 || std::size_t(id) >= model_.accessors.size())
-            fail(role + " references accessor " + std::to_string(id) + ", file has " +
-                 std::to_string(model_.accessors.size()) + " accessors");
-        const tinygltf::Accessor& accessor = model_.accessors[std::size_t(id)];
-        const std::string label = "accessor " + std::to_string(id) + " (" + role + ")";
-        if (accessor.sparse.isSparse) fail(label + " is sparse: sparse accessors not supported");
-        const int component_size = tinygltf::GetComponentSizeInBytes(accessor.componentType);
-        const int component_count = tinygltf::GetNumComponentsInType(accessor.type);
-        if (component_size <= 0 || component_count <= 0)
-            fail(label + " has an invalid component type or type");
-        const std::uint64_t element_size = std::uint64_t(component_size) * component_count;
-        const int view_id = accessor.bufferView;
-        if (view_id < 0 || std::size_t(view_id) >= model_.bufferViews.size())
-            fail(label + " has no valid bufferView (bufferView " + std::to_string(view_id) +
-                 ", file has " + std::to_string(model_.bufferViews.size()) + ")");
-        const tinygltf::BufferView& view = model_.bufferViews[std::size_t(view_id)];
-        const std::string view_label = "bufferView " + std::to_string(view_id);
-        if (view.buffer < 0 || std::size_t(view.buffer) >= model_.buffers.size())
-            fail(view_label + " references buffer " + std::to_string(view.buffer) + ", file has " +
-                 std::to_string(model_.buffers.size()) + " buffers");
-        const std::vector<unsigned char>& buffer = model_.buffers[std::size_t(view.buffer)].data;
-        if (!elements_fit(view.byteOffset, 1, 1, view.byteLength, buffer.size()))
-            fail(view_label + " (byteOffset " + std::to_string(view.byteOffset) + ", byteLength " +
-                 std::to_string(view.byteLength) + ") runs past the end of buffer " +
-                 std::to_string(view.buffer) + " (" + std::to_string(buffer.size()) + " bytes)");
-        const std::uint64_t stride = view.byteStride != 0 ? view.byteStride : element_size;
-        if (stride < element_size)
-            fail(view_label + " has byteStride " + std::to_string(stride) + ", smaller than the " +
-                 std::to_string(element_size) + "-byte elements of " + label);
-        // Checked against the real buffer size before anything is allocated from `count`.
-        if (!elements_fit(accessor.byteOffset, accessor.count, stride, element_size,
-                          view.byteLength))
-            fail(label + " with byteOffset " + std::to_string(accessor.byteOffset) + ", count " +
-                 std::to_string(accessor.count) + " and stride " + std::to_string(stride) +
-                 " runs past the end of " + view_label + " (" + std::to_string(view.byteLength) +
-                 " bytes)");
-        return {buffer.data() + view.byteOffset + accessor.byteOffset, accessor.count, stride};
+    GltfElementRange resolve_accessor(int id, const std::string& role) const {
+        return resolve_gltf_accessor(model_, id, role, error_prefix());
     }
 
     // ---- Meshes ------------------------------------------------------------------------------
@@ -238,7 +185,7 @@ private:
         const auto position = primitive.attributes.find("POSITION");
         if (position == primitive.attributes.end()) fail(where + " has no POSITION attribute");
         const std::string role = "POSITION of " + where;
-        const ElementRange range = resolve_accessor(position->second, role);
+        const GltfElementRange range = resolve_accessor(position->second, role);
         const tinygltf::Accessor& accessor = model_.accessors[std::size_t(position->second)];
         if (accessor.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
             accessor.type != TINYGLTF_TYPE_VEC3)
@@ -267,7 +214,7 @@ private:
     /// Vertex index i of a primitive: read from its index accessor, or i itself when there
     /// is none (non-indexed geometry).
     struct IndexSource {
-        ElementRange range;
+        GltfElementRange range;
         int component_type = 0;  // 0 = implicit 0..count-1
         std::uint32_t at(std::uint64_t i) const {
             const unsigned char* p = range.first + i * range.stride;
@@ -329,6 +276,7 @@ private:
         if (!primitive.targets.empty()) ++result_.report.morphed_primitive_count;
 
         const std::uint64_t base = mesh.positions.size();
+        const std::uint64_t first_triangle = mesh.triangles.size();
         const std::uint64_t vertex_count = append_positions(primitive, where, mesh);
         const IndexSource indices = index_source(primitive, where, vertex_count);
         const std::uint64_t n = indices.range.count;
@@ -358,11 +306,15 @@ private:
             }
             mesh.triangles.push_back(triangle);
         }
+        result_.report.mesh_primitives[m].push_back({std::uint32_t(p), base, vertex_count,
+                                                     first_triangle, triangle_count,
+                                                     primitive.material});
     }
 
     void load_mesh(std::size_t m) {
         Mesh mesh;
         mesh.name = model_.meshes[m].name;
+        result_.report.mesh_primitives.emplace_back();
         for (std::size_t p = 0; p < model_.meshes[m].primitives.size(); ++p)
             load_primitive(m, p, mesh);
         result_.scene.meshes.push_back(std::move(mesh));

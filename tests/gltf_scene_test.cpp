@@ -1,5 +1,7 @@
 #include "rebraid/gltf_scene.h"
 
+#include <tiny_gltf.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -191,6 +193,37 @@ TEST(GltfScene, MixedModesConcatenateTrianglesAndSkipPointsAndLines) {
     EXPECT_EQ(mesh.positions[3], (Vec3f{0, 0, 1}));
     EXPECT_EQ(loaded.report.skipped_primitive_count(), 3u);
     EXPECT_EQ(loaded.report.primitive_count_by_mode[5], 1u);
+}
+
+TEST(GltfScene, ReportsWherePrimitivesWentAndKeepsTheModelOnRequest) {
+    GltfTestFile file;
+    const int tri_positions = file.add_positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    const int quad_positions = file.add_positions({{0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}});
+    nlohmann::json fan = primitive(quad_positions, -1, 6);
+    fan["material"] = 0;
+    const std::string path = single_mesh_file(
+        file, {primitive(tri_positions), primitive(quad_positions, -1, 1), fan}, "ranges.glb");
+    GltfLoadOptions options;
+    options.keep_model = true;
+    const GltfLoadResult loaded = load_gltf_scene_with_report(path, options);
+    ASSERT_EQ(loaded.report.mesh_primitives.size(), 1u);
+    const std::vector<GltfPrimitiveRange>& ranges = loaded.report.mesh_primitives[0];
+    ASSERT_EQ(ranges.size(), 2u);  // the LINES primitive has no entry
+    EXPECT_EQ(ranges[0].gltf_primitive, 0u);
+    EXPECT_EQ(ranges[0].first_vertex, 0u);
+    EXPECT_EQ(ranges[0].vertex_count, 3u);
+    EXPECT_EQ(ranges[0].first_triangle, 0u);
+    EXPECT_EQ(ranges[0].triangle_count, 1u);
+    EXPECT_EQ(ranges[0].material, -1);
+    EXPECT_EQ(ranges[1].gltf_primitive, 2u);
+    EXPECT_EQ(ranges[1].first_vertex, 3u);
+    EXPECT_EQ(ranges[1].vertex_count, 4u);
+    EXPECT_EQ(ranges[1].first_triangle, 1u);
+    EXPECT_EQ(ranges[1].triangle_count, 2u);
+    EXPECT_EQ(ranges[1].material, 0);
+    ASSERT_NE(loaded.model, nullptr);
+    EXPECT_EQ(loaded.model->meshes.size(), 1u);
+    EXPECT_EQ(load_gltf_scene_with_report(path).model, nullptr);
 }
 
 TEST(GltfScene, NonIndexedTrianglesUseConsecutiveVertices) {
