@@ -17,7 +17,7 @@
 // --rays: rays per kind and scene (default 200000; primary rays round it to a square image);
 // --threads: tracing threads (default 1: single-ray speed, timed by the thread's CPU time;
 // more: wall-clock time); --rounds: rounds of the compare benchmarks (default 5);
-// --leaf-size, --intersection-cost: BuildSettings of the flat and object BVHs (default: the
+// --leaf-size, --intersection-cost, --fill-nodes 0|1: BuildSettings of the flat and object BVHs (default: the
 // builder's defaults), to measure how the tree shape changes traversal speed.
 // Structures are built once per scene, outside the timed loops.
 #include <benchmark/benchmark.h>
@@ -310,6 +310,8 @@ int run(int argc, char** argv) {
         bench.build.max_leaf_size = std::uint32_t(std::stoul(v));
     if (std::string v = take_flag(argc, argv, "--intersection-cost"); !v.empty())
         bench.build.intersection_cost = std::stof(v);
+    if (std::string v = take_flag(argc, argv, "--fill-nodes"); !v.empty())
+        bench.build.fill_nodes = v != "0";
     bench.build.validate();
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
@@ -319,6 +321,7 @@ int run(int argc, char** argv) {
     benchmark::AddCustomContext("rounds", std::to_string(bench.round_count));
     benchmark::AddCustomContext("leaf_size", std::to_string(bench.build.max_leaf_size));
     benchmark::AddCustomContext("intersection_cost", std::to_string(bench.build.intersection_cost));
+    benchmark::AddCustomContext("fill_nodes", bench.build.fill_nodes ? "1" : "0");
 
     register_scene("default", [] { return make_default_scene(); });
     std::vector<std::filesystem::path> files;

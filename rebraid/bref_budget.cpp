@@ -7,18 +7,23 @@ namespace rebraid {
 
 std::uint64_t bref_budget(const RebraidSettings& settings, std::uint64_t instance_count,
                           std::uint64_t instanced_primitive_count) {
+    std::uint64_t budget = 0;
     switch (settings.budget_rule) {
         case BudgetRule::per_instance:
-            return std::uint64_t(std::floor(double(settings.budget_factor) * double(instance_count)));
+            budget =
+                std::uint64_t(std::floor(double(settings.budget_factor) * double(instance_count)));
+            break;
         case BudgetRule::per_primitive:
-            return std::uint64_t(double(instanced_primitive_count) /
-                                 double(settings.primitives_per_bref));
+            budget = std::uint64_t(double(instanced_primitive_count) /
+                                   double(settings.primitives_per_bref));
+            break;
     }
-    return 0;
+    const std::uint64_t openable =
+        instanced_primitive_count > instance_count ? instanced_primitive_count - instance_count : 0;
+    return std::min({budget, openable, settings.max_budget});
 }
 
-std::pair<BRefSegment, BRefSegment> split_free_space(const BRefSegment& parent,
-                                                     std::uint32_t mid,
+std::pair<BRefSegment, BRefSegment> split_free_space(const BRefSegment& parent, std::uint32_t mid,
                                                      std::uint32_t left_openable,
                                                      std::uint32_t right_openable,
                                                      std::span<BuildPrim> prims) {

@@ -82,11 +82,14 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
             if (!criterion.wants_to_open(parent, parent_target)) continue;
             const std::uint32_t extra = extra_children(parent_target, source);
             if (offset + extra > space) break;  // this and every later BRef stay closed
-            const WideNode& node = source.bvh_of(parent_target).nodes[parent_target.object_node.node_id()];
+            const ObjectBvh& bvh = source.bvh_of(parent_target);
+            const WideNode& node = bvh.nodes[parent_target.object_node.node_id()];
             const AffineTransform& to_world = source.object_to_world[parent_target.instance_id];
             const std::uint32_t child_weight = std::max(1u, parent.weight / (extra + 1));
             for (std::uint32_t c = 0; c <= extra; ++c) {
-                const BBox3f bounds = to_world.transform_bbox(node.child_bounds(int(c)));
+                const BBox3f bounds =
+                    bref_world_bounds(bvh, node.children[c], node.child_bounds(int(c)), to_world,
+                                      source.bounds_rule);
                 const BRefTarget child_target{parent_target.instance_id, node.children[c]};
                 if (c == 0) {  // the first child replaces its parent, keeping its target slot
                     parent = {bounds, parent.id, child_weight};

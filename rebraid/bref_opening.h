@@ -5,6 +5,7 @@
 
 #include "rebraid/bbox.h"
 #include "rebraid/bref.h"
+#include "rebraid/bref_bounds.h"
 #include "rebraid/object_bvh.h"
 #include "rebraid/transform.h"
 
@@ -15,6 +16,7 @@ struct BRefSource {
     std::span<const ObjectBvh> object_bvhs;          ///< index = MeshId
     std::span<const std::uint32_t> instance_mesh;    ///< index = InstanceId
     std::span<const AffineTransform> object_to_world;  ///< index = InstanceId
+    BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_box;
 
     const ObjectBvh& bvh_of(const BRefTarget& target) const {
         return object_bvhs[instance_mesh[target.instance_id]];

@@ -32,6 +32,9 @@ struct BuildSettings {
     /// and sweeping bins. 2 builds the shared scenes about 6% faster than 1 for an SAH
     /// within 0.02%; 4 costs up to 0.8% SAH.
     std::uint32_t prims_per_bin = 2;
+    /// Fill wide nodes by also splitting children the binary SAH test would keep as leaves
+    /// (any child of more than one prim, largest first).
+    bool fill_nodes = true;
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

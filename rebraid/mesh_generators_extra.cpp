@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include "rebraid/mesh_generators.h"
@@ -28,22 +29,53 @@ void append_transformed(Mesh& mesh, const Mesh& part, const AffineTransform& tra
         mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
 }
 
-/// Appends the axis-aligned box [lo, hi].
-void append_box(Mesh& mesh, Vec3f lo, Vec3f hi) {
-    static const Mesh unit_box = make_box({0.5f, 0.5f, 0.5f});
+/// The box [-0.5, 0.5]^3 with its four sides along X cut into `segment_count` slices, so a
+/// long bar made from it has no triangle longer than a slice: long thin triangles would give
+/// every BVH over the part huge, mostly empty boxes once the part is rotated. Triangles:
+/// 8 * segment_count + 4, wound outward.
+Mesh make_unit_bar(std::uint32_t segment_count) {
+    const std::uint32_t n = std::max(segment_count, 1u);
+    // Ring k (at x = -0.5 + k / n) holds corners (y, z) in the order below, 4k + j.
+    constexpr float kRing[4][2] = {{-0.5f, -0.5f}, {0.5f, -0.5f}, {0.5f, 0.5f}, {-0.5f, 0.5f}};
+    Mesh mesh;
+    for (std::uint32_t k = 0; k <= n; ++k)
+        for (const auto& corner : kRing)
+            mesh.positions.push_back(
+                {-0.5f + static_cast<float>(k) / static_cast<float>(n), corner[0], corner[1]});
+    // Quad a-b-c-d, turned around when its normal points against `outward`.
+    auto add_outward = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d,
+                           Vec3f outward) {
+        const Vec3f& pa = mesh.positions[a];
+        if (dot(cross(mesh.positions[b] - pa, mesh.positions[c] - pa), outward) < 0.0f)
+            std::swap(b, d);
+        add_quad(mesh, a, b, c, d);
+    };
+    for (std::uint32_t k = 0; k < n; ++k)
+        for (std::uint32_t j = 0; j < 4; ++j) {
+            const std::uint32_t next = (j + 1) % 4;
+            const Vec3f outward{0.0f, kRing[j][0] + kRing[next][0], kRing[j][1] + kRing[next][1]};
+            add_outward(4 * k + j, 4 * (k + 1) + j, 4 * (k + 1) + next, 4 * k + next, outward);
+        }
+    add_outward(0, 1, 2, 3, {-1.0f, 0.0f, 0.0f});
+    add_outward(4 * n, 4 * n + 1, 4 * n + 2, 4 * n + 3, {1.0f, 0.0f, 0.0f});
+    return mesh;
+}
+
+/// Appends the axis-aligned box [lo, hi], its sides along X cut into `segment_count` slices.
+void append_box(Mesh& mesh, Vec3f lo, Vec3f hi, std::uint32_t segment_count = 1) {
     append_transformed(
-        mesh, unit_box,
+        mesh, make_unit_bar(segment_count),
         AffineTransform::translate((lo + hi) * 0.5f) * AffineTransform::scale(hi - lo));
 }
 
-/// Appends a square bar of side `thickness` from `a` to `b`.
-void append_bar(Mesh& mesh, Vec3f a, Vec3f b, float thickness) {
-    static const Mesh unit_box = make_box({0.5f, 0.5f, 0.5f});
+/// Appends a square bar of side `thickness` from `a` to `b`, cut into `segment_count` slices
+/// along its length.
+void append_bar(Mesh& mesh, Vec3f a, Vec3f b, float thickness, std::uint32_t segment_count = 1) {
     const Vec3f along = normalize(b - a);
     const Vec3f helper = std::fabs(along.y) < 0.9f ? Vec3f{0, 1, 0} : Vec3f{1, 0, 0};
     const Vec3f side = normalize(cross(helper, along));
     // (along, side, along x side) is right-handed, so the box keeps its outward winding.
-    append_transformed(mesh, unit_box,
+    append_transformed(mesh, make_unit_bar(segment_count),
                        {b - a, side * thickness, cross(along, side) * thickness, (a + b) * 0.5f});
 }
 
@@ -311,9 +343,10 @@ Mesh make_i_beam(const IBeamSettings& settings) {
     const float flange = settings.flange_thickness, web = 0.5f * settings.web_thickness;
     Mesh mesh;
     mesh.name = "i_beam";
-    append_box(mesh, {-x, y - flange, -z}, {x, y, z});
-    append_box(mesh, {-x, -y, -z}, {x, -y + flange, z});
-    append_box(mesh, {-x, -y + flange, -web}, {x, y - flange, web});
+    const std::uint32_t n = settings.length_segment_count;
+    append_box(mesh, {-x, y - flange, -z}, {x, y, z}, n);
+    append_box(mesh, {-x, -y, -z}, {x, -y + flange, z}, n);
+    append_box(mesh, {-x, -y + flange, -web}, {x, y - flange, web}, n);
     return mesh;
 }
 
@@ -354,7 +387,7 @@ Mesh make_truss(const TrussSettings& settings) {
     // Chord corners in the YZ cross-section, in order around it; side s joins corners s, s+1.
     const float corners[4][2] = {{-h, -h}, {h, -h}, {h, h}, {-h, h}};
     for (const auto& c : corners)
-        append_bar(mesh, {-half_length, c[0], c[1]}, {half_length, c[0], c[1]}, t);
+        append_bar(mesh, {-half_length, c[0], c[1]}, {half_length, c[0], c[1]}, t, panels);
     for (int side = 0; side < 4; ++side) {
         const auto& from = corners[side];
         const auto& to = corners[(side + 1) % 4];

@@ -86,13 +86,15 @@ struct GemSettings {
 Mesh make_gem(const GemSettings& settings = {});
 
 /// A steel I-beam along the X axis, centred on the origin: two flanges and a web (three
-/// boxes, 36 triangles).
+/// boxes with their long sides cut into length_segment_count slices; 3 * (8 * slices + 4)
+/// triangles).
 struct IBeamSettings {
-    float length = 1.0f;              ///< along X
-    float width = 0.03f;              ///< flange width (Z)
-    float height = 0.045f;            ///< total height (Y)
-    float flange_thickness = 0.006f;  ///< along Y
-    float web_thickness = 0.004f;     ///< along Z
+    float length = 1.0f;                      ///< along X
+    float width = 0.03f;                      ///< flange width (Z)
+    float height = 0.045f;                    ///< total height (Y)
+    float flange_thickness = 0.006f;          ///< along Y
+    float web_thickness = 0.004f;             ///< along Z
+    std::uint32_t length_segment_count = 32;  ///< slices along X; at least 1
 };
 Mesh make_i_beam(const IBeamSettings& settings = {});
 
@@ -112,7 +114,8 @@ Mesh make_flanged_pipe(const FlangedPipeSettings& settings = {});
 
 /// A lattice truss along the X axis, centred on the origin: four chords (square bars) on
 /// the corners of a square cross-section, braced by one diagonal bar per panel on each of
-/// the four sides; mostly empty space inside its box. Triangles: 12 * (4 + 4 * panel_count).
+/// the four sides; mostly empty space inside its box. Chords are cut into one slice per
+/// panel. Triangles: 4 * (8 * panel_count + 4) + 12 * 4 * panel_count.
 struct TrussSettings {
     float length = 1.0f;             ///< along X
     float width = 0.04f;             ///< side of the square cross-section (chord centres)

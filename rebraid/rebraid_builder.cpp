@@ -193,12 +193,14 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
         const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
         if (bvh.root.is_empty()) continue;
         // One BRef per instance at its object root, with the root's primitive count (§3.2).
-        prims[n] = {object_to_world[i].transform_bbox(bvh.bounds), n, bvh.prim_count()};
+        prims[n] = {bref_world_bounds(bvh, bvh.root, bvh.bounds, object_to_world[i],
+                                      settings.bounds_rule),
+                    n, bvh.prim_count()};
         targets[n] = {InstanceId(i), bvh.root};
         ++n;
     }
 
-    const BRefSource source{object_bvhs, instance_mesh, object_to_world};
+    const BRefSource source{object_bvhs, instance_mesh, object_to_world, settings.bounds_rule};
     const RebraidPolicy policy(prims, targets, source, settings);
     const RebraidCandidate root = policy.prepare(BRefSegment{0, n, capacity, n, true}, false);
     TopLevelBvh& top = result.top;

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 
+#include "rebraid/bref_bounds.h"
 #include "rebraid/build_settings.h"
 
 namespace rebraid {
@@ -29,12 +30,22 @@ struct RebraidSettings {
     float budget_factor = 4.0f;
     /// Instanced primitives per extra BRef under BudgetRule::per_primitive (paper: 1000).
     float primitives_per_bref = 1000.0f;
+    /// Hard cap on the extra BRefs, whatever the rule gives: the BRef array (40 bytes per
+    /// BRef, plus as much again of build scratch) is allocated in full before the build
+    /// starts, so a huge budget_factor must not turn into gigabytes. The default, 2^22 extra
+    /// BRefs (160 MiB of array), is what the paper's factor of 4 needs for a million
+    /// instances. At most 2^27 - 1 (the top level's item limit). See bref_budget() for the
+    /// other cap.
+    std::uint64_t max_budget = std::uint64_t(1) << 22;
     /// Segments with at most this many BRefs stop opening when their boxes overlap little
     /// (paper §4.4: 4).
     std::uint32_t small_segment_brefs = 4;
     /// "Little" overlap for that test: every pairwise intersection of the segment's BRef
     /// boxes has at most this fraction of the surface area of the smaller box.
     float small_overlap_fraction = 0.1f;
+    /// World-space boxes of BRefs of transformed instances: the paper's transformed node box
+    /// (§5.4) or the tighter union of transformed children (bref_bounds.h).
+    BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_box;
     /// Binning, SAH costs and the serial threshold of the top-level build (leaves hold one
     /// BRef: max_leaf_size is 1).
     BuildSettings build{.max_leaf_size = 1};

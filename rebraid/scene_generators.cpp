@@ -10,6 +10,7 @@
 #include "rebraid/mesh_generators.h"
 #include "rebraid/mesh_generators_extra.h"
 #include "rebraid/random.h"
+#include "rebraid/world_space_objects.h"
 
 namespace rebraid {
 namespace {
@@ -377,6 +378,23 @@ Scene make_city(std::uint32_t count, std::uint64_t seed) {
     return scene;
 }
 
+/// The kind's scene with shared meshes placed by instance transforms.
+Scene make_instanced_scene(SceneKind kind, std::uint32_t count, std::uint64_t seed) {
+    switch (kind) {
+        case SceneKind::kTrees:
+            return make_forest(count, seed, false);
+        case SceneKind::kCrown:
+            return make_crown(count, seed);
+        case SceneKind::kPowerplant:
+            return make_powerplant(count, seed);
+        case SceneKind::kCity:
+            return make_city(count, seed);
+        case SceneKind::kHuge:
+            return make_forest(count, seed, true);
+    }
+    throw Error("generate_scene: invalid scene kind " + std::to_string(static_cast<int>(kind)));
+}
+
 }  // namespace
 
 std::span<const SceneKind> all_scene_kinds() {
@@ -416,7 +434,7 @@ std::uint32_t default_instance_count(SceneKind kind) {
         case SceneKind::kCrown:
             return 800;
         case SceneKind::kPowerplant:
-            return 2'000;
+            return 56;
         case SceneKind::kCity:
             return 2'500;
         case SceneKind::kHuge:
@@ -432,19 +450,22 @@ Scene generate_scene(SceneKind kind, const SceneGeneratorSettings& settings) {
         throw Error("generate_scene: " + std::string(scene_kind_name(kind)) + ": instance_count " +
                     std::to_string(count) + " exceeds the limit of " +
                     std::to_string(kMaxGeneratedInstances));
-    switch (kind) {
-        case SceneKind::kTrees:
-            return make_forest(count, settings.seed, false);
-        case SceneKind::kCrown:
-            return make_crown(count, settings.seed);
-        case SceneKind::kPowerplant:
-            return make_powerplant(count, settings.seed);
-        case SceneKind::kCity:
-            return make_city(count, settings.seed);
-        case SceneKind::kHuge:
-            return make_forest(count, settings.seed, true);
-    }
-    throw Error("generate_scene: invalid scene kind " + std::to_string(static_cast<int>(kind)));
+    const bool world_space = settings.placement == ObjectPlacement::world_space ||
+                             (settings.placement == ObjectPlacement::kind_default &&
+                              (kind == SceneKind::kCrown || kind == SceneKind::kPowerplant));
+    if (!world_space) return make_instanced_scene(kind, count, settings.seed);
+    // The paper's Powerplant is 56 objects of pipe work, each spread through the plant; one
+    // object per piece would be far smaller than that.
+    const std::uint32_t pieces_per_object =
+        kind == SceneKind::kPowerplant ? kPowerplantPiecesPerObject : 1;
+    const std::uint64_t piece_count = std::uint64_t(count) * pieces_per_object;
+    if (piece_count > kMaxGeneratedInstances)
+        throw Error("generate_scene: " + std::string(scene_kind_name(kind)) + ": " +
+                    std::to_string(count) + " objects of " + std::to_string(pieces_per_object) +
+                    " pieces exceed the limit of " + std::to_string(kMaxGeneratedInstances) +
+                    " pieces");
+    return bake_instances_into_world_space(
+        make_instanced_scene(kind, std::uint32_t(piece_count), settings.seed), pieces_per_object);
 }
 
 }  // namespace rebraid

@@ -21,11 +21,15 @@ enum class SceneKind {
     kTrees,
     /// A crown: a jewelled band, fleurons on its rim, strings of pearls, beads and knots along
     /// arches meeting at an orb and cross; hundreds of small objects packed together, each
-    /// overlapping its neighbours (the paper's Crown). Default 800 instances.
+    /// overlapping its neighbours (the paper's Crown). Default 800 instances, objects in
+    /// world space (see ObjectPlacement).
     kCrown,
     /// A plant's pipe work: long thin pipes, flanged pipes, I-beams and lattice trusses
     /// crossing each other through a volume, half axis-aligned, half in random directions
-    /// (the paper's Powerplant). Default 2,000 instances.
+    /// (the paper's Powerplant: 56 objects). By default objects in world space, each made of
+    /// kPowerplantPiecesPerObject pieces spread through the plant, so every object's box
+    /// spans much of the plant; instanced (ObjectPlacement::instanced), one piece per
+    /// instance. Default 56 (objects, or pieces when instanced).
     kPowerplant,
     /// A city: towers of varied stacked boxes, one per cell of a square grid, turned by
     /// multiples of 90 degrees and scaled, with streets between them, so no two instance
@@ -38,14 +42,31 @@ enum class SceneKind {
     kHuge,
 };
 
+/// How generate_scene() places objects.
+enum class ObjectPlacement {
+    /// The kind's own choice: `world_space` for kCrown and kPowerplant, whose models in the
+    /// paper are objects in world space (Benthin et al. 2017, §6: "56 objects", "850
+    /// objects"); `instanced` for the others.
+    kind_default,
+    /// A few meshes, each placed many times by instance transforms.
+    instanced,
+    /// Every placement is a mesh of its own with world-space vertices and the identity
+    /// transform (bake_instances_into_world_space()).
+    world_space,
+};
+
 /// Parameters of generate_scene().
 struct SceneGeneratorSettings {
+    ObjectPlacement placement = ObjectPlacement::kind_default;
     /// Number of instances; 0 = the kind's default (default_instance_count()). At most
     /// kMaxGeneratedInstances.
     std::uint32_t instance_count = 0;
     /// Every random choice (placements and mesh shapes) comes from this seed.
     std::uint64_t seed = 1;
 };
+
+/// Pieces of pipe work per world-space Powerplant object.
+inline constexpr std::uint32_t kPowerplantPiecesPerObject = 36;
 
 /// Largest instance count generate_scene() accepts.
 inline constexpr std::uint32_t kMaxGeneratedInstances = 50'000'000;

@@ -164,7 +164,10 @@ public:
         // positions) could go on peeling one prim at a time; index splits halve the range,
         // which bounds the depth, and with it the traversal stack, by kMaxDepth.
         const bool median_only = depth + 1 >= std::uint32_t(kSahDepthLimit);
-        // Grow the node: split the largest splittable child until the node is full.
+        // Grow the node: split the largest splittable child until the node is full. Leaves
+        // of more than one prim are split too: within a node a split costs no extra node
+        // visit, so a full node of smaller leaves always lowers the SAH (the binary leaf test
+        // in evaluate() charges a traversal a wide node does not pay).
         std::array<Candidate, kBvhWidth> kids;
         int kid_count = 0;
         for (const Candidate& half : split(c, median_only)) kids[kid_count++] = half;
@@ -172,7 +175,8 @@ public:
             int pick = -1;
             float largest = -1.0f;
             for (int i = 0; i < kid_count; ++i)
-                if (!kids[i].is_leaf && kids[i].area > largest) {
+                if ((!kids[i].is_leaf || (settings_.fill_nodes && kids[i].size() > 1)) &&
+                    kids[i].area > largest) {
                     largest = kids[i].area;
                     pick = i;
                 }

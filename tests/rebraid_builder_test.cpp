@@ -25,7 +25,7 @@ struct NamedSettings {
 };
 
 /// The paper's defaults, plain two-level (no budget), open everything (huge budget, no
-/// threshold), and the per-primitive budget rule.
+/// threshold), the per-primitive budget rule, and the tighter BRef bounds rule.
 std::vector<NamedSettings> settings_variants() {
     return {
         {"paper", {}},
@@ -34,6 +34,9 @@ std::vector<NamedSettings> settings_variants() {
         {"threshold-0.5", {.open_threshold = 0.5f, .budget_factor = 2.0f}},
         {"per-primitive", {.budget_rule = BudgetRule::per_primitive,
                            .primitives_per_bref = 100.0f}},
+        {"children-bounds", {.open_threshold = 0.05f,
+                             .budget_factor = 8.0f,
+                             .bounds_rule = BRefBoundsRule::transformed_children}},
     };
 }
 

@@ -21,11 +21,19 @@
 #include "rebraid/mesh_generators.h"
 #include "rebraid/mesh_generators_extra.h"
 #include "rebraid/scene_generators.h"
+#include "rebraid/world_space_objects.h"
 
 namespace rebraid {
 namespace {
 
 namespace fs = std::filesystem;
+
+/// `count` placements' worth of objects: world-space Powerplant objects hold
+/// kPowerplantPiecesPerObject pieces each (at least 2 objects, so two can overlap).
+std::uint32_t scaled_count(SceneKind kind, std::uint32_t count) {
+    if (kind != SceneKind::kPowerplant) return count;
+    return std::max(2u, count / kPowerplantPiecesPerObject);
+}
 
 fs::path scratch_path(const std::string& name) {
     const fs::path dir = fs::path(REBRAID_TEST_TMP) / "scene_generators_test";
@@ -163,6 +171,7 @@ TEST(SceneGenerators, RejectsTooManyInstances) {
 TEST(SceneGenerators, EveryKindIsValidWithExactlyTheRequestedInstances) {
     for (SceneKind kind : all_scene_kinds())
         for (std::uint32_t count : {1u, 2u, 7u, 50u, 333u}) {
+            if (kind == SceneKind::kPowerplant && count > 7) count = scaled_count(kind, count);
             const Scene scene = generate_scene(kind, {.instance_count = count, .seed = 5});
             SCOPED_TRACE(std::string(scene_kind_name(kind)) + " " + std::to_string(count));
             EXPECT_NO_THROW(scene.validate());
@@ -178,8 +187,9 @@ TEST(SceneGenerators, DefaultsHaveTheDocumentedInstanceCounts) {
         EXPECT_NO_THROW(scene.validate());
         EXPECT_EQ(scene.instances.size(), default_instance_count(kind));
         if (kind == SceneKind::kHuge) continue;  // checked below
-        // "Hundreds" to "thousands" of instances, and few enough triangles for a flat BVH.
-        EXPECT_GE(scene.instances.size(), 100u);
+        // "Hundreds" to "thousands" of instances (Powerplant: dozens of large objects, as
+        // the paper's 56), and few enough triangles for a flat BVH.
+        EXPECT_GE(scene.instances.size(), kind == SceneKind::kPowerplant ? 40u : 100u);
         EXPECT_LE(scene.instances.size(), 12'000u);
         EXPECT_GE(scene.instanced_triangle_count(), 500'000u);
         EXPECT_LE(scene.instanced_triangle_count(), 20'000'000u);
@@ -202,9 +212,12 @@ TEST(SceneGenerators, HugeHasTenThousandInstancesAndHundredMillionTriangles) {
 TEST(SceneGenerators, SameSeedGivesIdenticalSceneOtherSeedAnother) {
     for (SceneKind kind : all_scene_kinds()) {
         SCOPED_TRACE(scene_kind_name(kind));
-        const Scene a = generate_scene(kind, {.instance_count = 200, .seed = 42});
-        const Scene b = generate_scene(kind, {.instance_count = 200, .seed = 42});
-        const Scene c = generate_scene(kind, {.instance_count = 200, .seed = 43});
+        const Scene a =
+            generate_scene(kind, {.instance_count = scaled_count(kind, 200), .seed = 42});
+        const Scene b =
+            generate_scene(kind, {.instance_count = scaled_count(kind, 200), .seed = 42});
+        const Scene c =
+            generate_scene(kind, {.instance_count = scaled_count(kind, 200), .seed = 43});
         EXPECT_TRUE(same_scene_exactly(a, b));
         EXPECT_FALSE(same_scene_exactly(a, c));
     }
@@ -212,7 +225,8 @@ TEST(SceneGenerators, SameSeedGivesIdenticalSceneOtherSeedAnother) {
 
 TEST(SceneGenerators, OverlapKindsOverlapHeavilyCityNot) {
     for (SceneKind kind : all_scene_kinds()) {
-        const Scene scene = generate_scene(kind, {.instance_count = 500, .seed = 9});
+        const Scene scene =
+            generate_scene(kind, {.instance_count = scaled_count(kind, 500), .seed = 9});
         const OverlapSummary overlap = summarize_overlap(scene);
         SCOPED_TRACE(std::string(scene_kind_name(kind)) + ": overlapping fraction " +
                      std::to_string(overlap.overlapping_fraction) + ", mean overlaps " +
@@ -239,7 +253,8 @@ float lowest_point(const Scene& scene, InstanceId id) {
 
 TEST(SceneGenerators, ObjectsRestOnTheGroundYUp) {
     for (SceneKind kind : all_scene_kinds()) {
-        const Scene scene = generate_scene(kind, {.instance_count = 300, .seed = 2});
+        const Scene scene =
+            generate_scene(kind, {.instance_count = scaled_count(kind, 300), .seed = 2});
         SCOPED_TRACE(scene_kind_name(kind));
         std::vector<float> lowest;
         for (InstanceId i = 0; i < scene.instances.size(); ++i)
@@ -273,11 +288,12 @@ TEST(MeshGeneratorsExtra, TriangleCountsMatchTheirFormulas) {
         32u + 3 * 2 * 4 * 12);
     EXPECT_EQ(make_ring_band({.segment_count = 30}).triangles.size(), 8u * 30);
     EXPECT_EQ(make_gem({.facet_count = 9}).triangles.size(), 4u * 9);
-    EXPECT_EQ(make_i_beam({}).triangles.size(), 36u);
+    EXPECT_EQ(make_i_beam({.length_segment_count = 1}).triangles.size(), 36u);
+    EXPECT_EQ(make_i_beam({.length_segment_count = 5}).triangles.size(), 3u * (8 * 5 + 4));
     EXPECT_EQ(make_flanged_pipe({.segment_count = 8, .length_segment_count = 5, .flange_count = 3})
                   .triangles.size(),
               2u * 8 * 6 + 3 * 4 * 8);
-    EXPECT_EQ(make_truss({.panel_count = 7}).triangles.size(), 12u * (4 + 4 * 7));
+    EXPECT_EQ(make_truss({.panel_count = 7}).triangles.size(), 4u * (8 * 7 + 4) + 12u * 4 * 7);
 }
 
 TEST(MeshGeneratorsExtra, ClosedPartsAreWatertightAndWoundOutward) {
@@ -325,7 +341,8 @@ TEST(MeshGeneratorsExtra, SameSettingsSameMeshOtherSeedAnother) {
 
 TEST(GltfWriter, EveryKindRoundTripsThroughGlbAndGltf) {
     for (SceneKind kind : all_scene_kinds()) {
-        const Scene scene = generate_scene(kind, {.instance_count = 60, .seed = 8});
+        const Scene scene =
+            generate_scene(kind, {.instance_count = scaled_count(kind, 60), .seed = 8});
         for (const char* extension : {".glb", ".gltf"}) {
             SCOPED_TRACE(std::string(scene_kind_name(kind)) + extension);
             const fs::path path = scratch_path(std::string(scene_kind_name(kind)) + extension);
@@ -392,6 +409,79 @@ TEST(GenerateCommand, WritesALoadableSceneEqualToTheGenerator) {
     const Scene loaded = load_gltf_scene(path.string());
     EXPECT_EQ(loaded.instances.size(), 50u);
     expect_same_scene(generate_scene(SceneKind::kCity, {.instance_count = 50, .seed = 4}), loaded);
+}
+
+TEST(SceneGenerators, CrownAndPowerplantAreObjectsInWorldSpaceByDefault) {
+    for (SceneKind kind : all_scene_kinds()) {
+        SCOPED_TRACE(std::string(scene_kind_name(kind)));
+        if (kind == SceneKind::kHuge) continue;  // an instanced forest like trees, only larger
+        const Scene scene = generate_scene(kind, {.instance_count = 12, .seed = 3});
+        if (kind != SceneKind::kCrown && kind != SceneKind::kPowerplant) {
+            expect_same_scene(scene, generate_scene(kind, {.placement = ObjectPlacement::instanced,
+                                                           .instance_count = 12,
+                                                           .seed = 3}));
+            continue;
+        }
+        const std::uint32_t pieces =
+            kind == SceneKind::kPowerplant ? kPowerplantPiecesPerObject : 1;
+        const Scene instanced = generate_scene(
+            kind,
+            {.placement = ObjectPlacement::instanced, .instance_count = 12 * pieces, .seed = 3});
+        expect_same_scene(scene, bake_instances_into_world_space(instanced, pieces));
+        EXPECT_EQ(scene.meshes.size(), 12u);
+    }
+}
+
+TEST(WorldSpaceObjects, BakesGroupsOfInstancesIntoWorldSpaceMeshes) {
+    const Scene scene = generate_scene(SceneKind::kTrees, {.instance_count = 7, .seed = 5});
+    const Scene baked = bake_instances_into_world_space(scene, 3);
+    ASSERT_EQ(baked.instances.size(), 3u);  // 3 + 3 + 1
+    ASSERT_EQ(baked.meshes.size(), 3u);
+    EXPECT_EQ(baked.instanced_triangle_count(), scene.instanced_triangle_count());
+    EXPECT_NO_THROW(baked.validate());
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(baked.instances[k].mesh_id, MeshId(k));
+        EXPECT_EQ(baked.instances[k].object_to_world, AffineTransform::identity());
+    }
+    // Triangle j of a placed mesh, corner by corner, where the instance put it (within
+    // rounding: the library may fuse multiply-adds where this file does not).
+    std::size_t first_triangle = 0;        // of the placed mesh within the object
+    for (std::size_t i = 3; i < 6; ++i) {  // the second object
+        const Instance& placed = scene.instances[i];
+        const Mesh& source = scene.meshes[placed.mesh_id];
+        for (PrimId j = 0; j < source.triangles.size(); j += 13) {
+            const auto expected = source.corners(j);
+            const auto actual = baked.meshes[1].corners(PrimId(first_triangle + j));
+            for (int c = 0; c < 3; ++c) {
+                const Vec3f world = placed.object_to_world.transform_point(expected[c]);
+                for (int axis = 0; axis < 3; ++axis)
+                    EXPECT_NEAR(actual[c][axis], world[axis],
+                                1e-6f * (1.0f + std::fabs(world[axis])));
+            }
+        }
+        first_triangle += source.triangles.size();
+    }
+    EXPECT_EQ(first_triangle, baked.meshes[1].triangles.size());
+    EXPECT_THROW(bake_instances_into_world_space(scene, 0), Error);
+}
+
+TEST(GenerateCommand, PlacementOptionChoosesInstancedOrWorldSpace) {
+    const fs::path path = scratch_path("cli/crown_instanced.glb");
+    std::string output;
+    ASSERT_EQ(run_rebraid(
+                  "generate crown -o '" + path.string() + "' --instances 30 --placement instanced",
+                  output),
+              0)
+        << output;
+    EXPECT_LT(load_gltf_scene(path.string()).meshes.size(), 30u);
+    ASSERT_EQ(run_rebraid(
+                  "generate city -o '" + path.string() + "' --instances 30 --placement world-space",
+                  output),
+              0)
+        << output;
+    EXPECT_EQ(load_gltf_scene(path.string()).meshes.size(), 30u);
+    EXPECT_NE(run_rebraid("generate city -o '" + path.string() + "' --placement nowhere", output),
+              0);
 }
 
 TEST(GenerateCommand, UnknownKindFailsListingTheKinds) {

@@ -10,6 +10,7 @@
 #include "rebraid/mesh_generators.h"
 #include "rebraid/random.h"
 #include "rebraid/scene.h"
+#include "rebraid/scene_generators.h"
 
 namespace rebraid::test {
 
@@ -105,6 +106,13 @@ inline std::vector<NamedScene> generated_scenes() {
     scenes.push_back({"degenerate", make_degenerate_scene()});
     scenes.push_back({"huge", make_scaled_scene(1e5f, {3e6f, -1e6f, 2e6f})});
     scenes.push_back({"tiny", make_scaled_scene(1e-4f, {1e-3f, 0.0f, -2e-3f})});
+    // Each family of `rebraid generate` (rebraid/scene_generators.h), small.
+    for (const auto& [kind, count] : {std::pair{SceneKind::kTrees, 30u},
+                                      {SceneKind::kCrown, 80u},
+                                      {SceneKind::kPowerplant, 2u},
+                                      {SceneKind::kCity, 50u}})
+        scenes.push_back({std::string(scene_kind_name(kind)),
+                          generate_scene(kind, {.instance_count = count, .seed = 7})});
     return scenes;
 }
 

@@ -1,5 +1,6 @@
 // Options shared by several subcommands.
 #include <CLI/CLI.hpp>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,34 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str()
         ->type_name("B");
+    const std::map<std::string, BudgetRule> budget_rules{
+        {"instances", BudgetRule::per_instance}, {"primitives", BudgetRule::per_primitive}};
+    command
+        .add_option("--budget-rule", options.rebraid.budget_rule,
+                    "rebraid: size the BRef budget by instances (--budget-factor x instances, "
+                    "the paper's rule for instanced scenes) or primitives (instanced "
+                    "primitives / --primitives-per-bref, its rule for objects in world space; "
+                    "paper 5.2)")
+        ->transform(CLI::CheckedTransformer(budget_rules, CLI::ignore_case))
+        ->default_str("instances")
+        ->type_name("RULE");
+    command
+        .add_option("--primitives-per-bref", options.rebraid.primitives_per_bref,
+                    "rebraid: primitives per extra BRef under --budget-rule primitives")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str()
+        ->type_name("P");
+    const std::map<std::string, BRefBoundsRule> bounds_rules{
+        {"box", BRefBoundsRule::transformed_box},
+        {"children", BRefBoundsRule::transformed_children}};
+    command
+        .add_option("--bref-bounds", options.rebraid.bounds_rule,
+                    "rebraid: world boxes of instanced BRefs: box (the node's box transformed, "
+                    "paper 5.4) or children (union of its transformed children: tighter)")
+        ->transform(CLI::CheckedTransformer(bounds_rules, CLI::ignore_case))
+        ->default_str(options.rebraid.bounds_rule == BRefBoundsRule::transformed_box ? "box"
+                                                                                     : "children")
+        ->type_name("RULE");
 }
 
 }  // namespace rebraid::cli

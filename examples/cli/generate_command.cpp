@@ -1,10 +1,12 @@
-// `rebraid generate KIND -o FILE.glb [--instances N] [--seed S]`: write a generated scene.
+// `rebraid generate KIND -o FILE.glb [--instances N] [--seed S] [--placement P]`: write a
+// generated scene.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -22,6 +24,7 @@ struct GenerateOptions {
     std::string output_path;
     std::uint32_t instance_count = 0;  ///< 0: the kind's default
     std::uint64_t seed = 1;
+    ObjectPlacement placement = ObjectPlacement::kind_default;
 };
 
 double milliseconds_since(std::chrono::steady_clock::time_point start) {
@@ -32,8 +35,9 @@ double milliseconds_since(std::chrono::steady_clock::time_point start) {
 void run_generate(const GenerateOptions& options) {
     const SceneKind kind = parse_scene_kind(options.kind_name);
     const auto generate_start = std::chrono::steady_clock::now();
-    const Scene scene =
-        generate_scene(kind, {.instance_count = options.instance_count, .seed = options.seed});
+    const Scene scene = generate_scene(kind, {.placement = options.placement,
+                                              .instance_count = options.instance_count,
+                                              .seed = options.seed});
     const double generate_ms = milliseconds_since(generate_start);
 
     create_parent_directories(options.output_path);
@@ -83,6 +87,17 @@ void add_generate_command(CLI::App& app, CommonOptions& common, CommandAction& a
         ->check(CLI::Range(std::uint32_t{0}, kMaxGeneratedInstances))
         ->capture_default_str();
     command->add_option("--seed", options->seed, "random seed")->capture_default_str();
+    const std::map<std::string, ObjectPlacement> placements{
+        {"kind", ObjectPlacement::kind_default},
+        {"instanced", ObjectPlacement::instanced},
+        {"world-space", ObjectPlacement::world_space}};
+    command
+        ->add_option("--placement", options->placement,
+                     "kind: the family's own (world-space for crown and powerplant, as in the "
+                     "paper; instanced for the rest); instanced: shared meshes placed by "
+                     "transforms; world-space: every object its own mesh, identity transforms")
+        ->transform(CLI::CheckedTransformer(placements, CLI::ignore_case))
+        ->default_str("kind");
     // Accepted like every subcommand's; generation itself is sequential.
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_generate(*options); }; });

@@ -54,6 +54,13 @@ Ray Camera::ray_through(float pixel_x, float pixel_y, int width, int height) con
     // Map the pixel to [-1, 1] on both axes, y up.
     const float ndc_x = 2.0f * pixel_x / static_cast<float>(width) - 1.0f;
     const float ndc_y = 1.0f - 2.0f * pixel_y / static_cast<float>(height);
+    if (ortho_half_height > 0.0f) {
+        Ray ray;
+        ray.org = position + right * (ndc_x * ortho_half_height * aspect) +
+                  up * (ndc_y * ortho_half_height);
+        ray.dir = forward;
+        return ray;
+    }
     const Vec3f dir =
         forward + right * (ndc_x * tan_half_fov_y * aspect) + up * (ndc_y * tan_half_fov_y);
     Ray ray;

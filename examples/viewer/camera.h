@@ -9,14 +9,18 @@
 
 namespace rebraid::viewer {
 
-/// A pinhole camera. `forward`, `right` and `up` are unit vectors forming a right-handed
-/// frame (right = forward x up); image x grows along `right`, image y downward.
+/// A pinhole (or orthographic) camera. `forward`, `right` and `up` are unit vectors forming
+/// a right-handed frame (right = forward x up); image x grows along `right`, image y downward.
 struct Camera {
     Vec3f position;
     Vec3f forward{0.0f, 0.0f, -1.0f};
     Vec3f right{1.0f, 0.0f, 0.0f};
     Vec3f up{0.0f, 1.0f, 0.0f};
     float tan_half_fov_y = 0.41421356f;  ///< tan(vertical field of view / 2)
+    /// When positive, an orthographic camera: half the view's height in world units (the
+    /// width follows the image aspect); rays are parallel to `forward` and start in the plane
+    /// through `position`. 0 = perspective.
+    float ortho_half_height = 0.0f;
 
     /// The primary ray through the image point (`pixel_x`, `pixel_y`), measured in pixels
     /// from the top-left corner of a `width` x `height` image (pixel centres at +0.5).

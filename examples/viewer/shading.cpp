@@ -39,11 +39,6 @@ std::uint32_t hash_u32(std::uint32_t x) {
     return x;
 }
 
-float srgb_channel(float linear) {
-    const float c = std::clamp(linear, 0.0f, 1.0f);
-    return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-}
-
 }  // namespace
 
 Vec3f world_geometric_normal(const Scene& scene, InstanceId instance_id, PrimId prim_id) {
@@ -84,10 +79,6 @@ Vec3f sample_cosine_hemisphere(Vec3f normal, float u1, float u2) {
     orthonormal_basis(normal, tangent, bitangent);
     return tangent * (radius * std::cos(angle)) + bitangent * (radius * std::sin(angle)) +
            normal * height;
-}
-
-Vec3f linear_to_srgb(Vec3f linear) {
-    return {srgb_channel(linear.x), srgb_channel(linear.y), srgb_channel(linear.z)};
 }
 
 }  // namespace rebraid::viewer

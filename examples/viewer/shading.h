@@ -21,7 +21,4 @@ Vec3f sky_colour(Vec3f direction, Vec3f world_up);
 /// uniform numbers in [0, 1). Unit length.
 Vec3f sample_cosine_hemisphere(Vec3f normal, float u1, float u2);
 
-/// Linear [0, 1] to display values (sRGB transfer curve), clamped.
-Vec3f linear_to_srgb(Vec3f linear);
-
 }  // namespace rebraid::viewer
