@@ -1,0 +1,209 @@
+// Updating the BVH of a deforming mesh: time per frame and SAH per update strategy
+// (ObjectBvhUpdater) over an animation of N frames, at 1 and 2 threads.
+//
+// Scenes: "twist" (a welded torus knot of 131k triangles twisted and bent: coherent motion,
+// what refitting handles well) and "explode" (the same knot with its triangles unwelded,
+// each flying off along its own direction: incoherent motion, the case rotations and
+// restructuring are for).
+//
+// Usage: bench_update [--frames=N] [Google Benchmark flags, e.g.
+//        --benchmark_filter=explode --benchmark_counters_tabular=true]
+// Time is the mean update time per frame (manual time; making the frame's positions and
+// computing the SAH counters are excluded). Counters: sah (after the last frame), sah_mean
+// (over the frames), vs_rebuild (sah over the SAH of a fresh build of the last frame),
+// rebuilds (frames on which the strategy rebuilt). rotate_lazy searches a node for rotations
+// only when its children grew by 1% since its last search (min_growth_to_search = 0.01);
+// restructure_rotates runs the rotation pass instead of a plain refit before restructuring.
+
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "rebraid/bvh_stats.h"
+#include "rebraid/mesh_generators.h"
+#include "rebraid/object_bvh_update.h"
+#include "rebraid/random.h"
+
+namespace {
+
+int g_frame_count = 100;
+
+/// The knot every scene deforms: 2 * 2048 * 32 = 131072 triangles.
+rebraid::Mesh knot() {
+    return rebraid::make_torus_knot({.path_segment_count = 2048, .tube_segment_count = 32});
+}
+
+/// A deforming mesh: the rest pose and the positions at any time t in [0, 1].
+class Animation {
+public:
+    virtual ~Animation() = default;
+    virtual const rebraid::Mesh& rest() const = 0;
+    virtual void pose(float t, rebraid::Mesh& mesh) const = 0;
+};
+
+/// Twist about Y (up to 2 radians per unit of height) and a bend about Z.
+class TwistAnimation final : public Animation {
+public:
+    TwistAnimation() : rest_(knot()) {}
+    const rebraid::Mesh& rest() const override { return rest_; }
+    void pose(float t, rebraid::Mesh& mesh) const override {
+        for (std::size_t i = 0; i < rest_.positions.size(); ++i) {
+            const rebraid::Vec3f p = rest_.positions[i];
+            const float twist = 2.0f * t * p.y;
+            const float x = std::cos(twist) * p.x + std::sin(twist) * p.z;
+            const float z = -std::sin(twist) * p.x + std::cos(twist) * p.z;
+            const float bend = 0.6f * t * x;
+            mesh.positions[i] = {std::cos(bend) * x - std::sin(bend) * p.y,
+                                 std::sin(bend) * x + std::cos(bend) * p.y, z};
+        }
+    }
+
+private:
+    rebraid::Mesh rest_;
+};
+
+/// Unwelded triangles, each moving rigidly along its own random direction at its own speed
+/// (up to 1.5 knot radii by t = 1), like the exploding-dragon animation of the papers.
+class ExplodeAnimation final : public Animation {
+public:
+    ExplodeAnimation() {
+        const rebraid::Mesh welded = knot();
+        rebraid::Random random(2024);
+        for (std::uint32_t prim = 0; prim < welded.triangles.size(); ++prim) {
+            const auto base = std::uint32_t(rest_.positions.size());
+            for (const rebraid::Vec3f& corner : welded.corners(prim))
+                rest_.positions.push_back(corner);
+            rest_.triangles.push_back({base, base + 1, base + 2});
+            velocity_.push_back(rebraid::Vec3f{random.next_float(-1, 1), random.next_float(-1, 1),
+                                               random.next_float(-1, 1)} *
+                                random.next_float(0.0f, 1.5f));
+        }
+    }
+    const rebraid::Mesh& rest() const override { return rest_; }
+    void pose(float t, rebraid::Mesh& mesh) const override {
+        for (std::size_t prim = 0; prim < rest_.triangles.size(); ++prim)
+            for (std::uint32_t vertex : rest_.triangles[prim])
+                mesh.positions[vertex] = rest_.positions[vertex] + velocity_[prim] * t;
+    }
+
+private:
+    rebraid::Mesh rest_;
+    std::vector<rebraid::Vec3f> velocity_;
+};
+
+const Animation& animation(const std::string& name) {
+    static const TwistAnimation twist;
+    static const ExplodeAnimation explode;
+    return name == "twist" ? static_cast<const Animation&>(twist) : explode;
+}
+
+struct Variant {
+    std::string name;
+    rebraid::ObjectBvhUpdateSettings settings;
+};
+
+std::vector<Variant> variants() {
+    using rebraid::UpdateStrategy;
+    std::vector<Variant> list;
+    for (UpdateStrategy strategy :
+         {UpdateStrategy::rebuild, UpdateStrategy::refit, UpdateStrategy::rotate,
+          UpdateStrategy::restructure, UpdateStrategy::automatic}) {
+        rebraid::ObjectBvhUpdateSettings settings;
+        settings.strategy = strategy;
+        list.push_back({std::string(rebraid::update_strategy_name(strategy)), settings});
+        if (strategy == UpdateStrategy::restructure) {
+            settings.restructure_rotates = true;
+            list.push_back({"restructure_rotates", settings});
+            settings.restructure_rotates = false;
+        }
+        if (strategy == UpdateStrategy::rotate) {
+            settings.rotation.min_growth_to_search = 0.01f;
+            list.push_back({"rotate_lazy", settings});
+            settings.rotation.min_growth_to_search = 0.0f;
+            settings.rotation.leaf_mode = rebraid::RotationLeafMode::split_merge;
+            list.push_back({"rotate_split_merge", settings});
+        }
+    }
+    return list;
+}
+
+void run_animation(benchmark::State& state, const std::string& scene, const Variant& variant) {
+    const Animation& anim = animation(scene);
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                std::size_t(state.range(0)));
+    rebraid::Mesh mesh = anim.rest();
+    double total_ms = 0.0, sah_sum = 0.0, sah = 0.0;
+    int rebuilds = 0;
+    for (auto _ : state) {
+        rebraid::ObjectBvhUpdater updater(variant.settings);
+        rebraid::ObjectBvh bvh = rebraid::build_object_bvh(anim.rest(), updater.rebuild_settings());
+        total_ms = sah_sum = 0.0;
+        rebuilds = 0;
+        for (int frame = 1; frame <= g_frame_count; ++frame) {
+            anim.pose(float(frame) / float(g_frame_count), mesh);
+            const rebraid::ObjectBvhUpdateReport report = updater.update(mesh, bvh);
+            total_ms += report.update_ms;
+            sah_sum += report.sah;
+            sah = report.sah;
+            rebuilds += report.applied == rebraid::UpdateStrategy::rebuild;
+        }
+        state.SetIterationTime(total_ms * 1e-3 / g_frame_count);
+    }
+    const double fresh_sah = rebraid::object_bvh_sah(rebraid::build_object_bvh(mesh));
+    state.counters["sah"] = sah;
+    state.counters["sah_mean"] = sah_sum / g_frame_count;
+    state.counters["vs_rebuild"] = sah / fresh_sah;
+    state.counters["rebuilds"] = rebuilds;
+    state.counters["tris"] = double(mesh.triangles.size());
+}
+
+void register_benchmarks() {
+    for (const char* scene : {"twist", "explode"}) {
+        for (const Variant& variant : variants()) {
+            const std::string name = std::string(scene) + "/" + variant.name;
+            benchmark::RegisterBenchmark(
+                name.c_str(), [scene = std::string(scene),
+                               variant](benchmark::State& s) { run_animation(s, scene, variant); })
+                ->Arg(1)
+                ->Arg(2)
+                ->ArgName("threads")
+                ->Iterations(1)
+                ->Unit(benchmark::kMillisecond)
+                ->UseManualTime();
+        }
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    for (int i = 1; i < argc; ++i) {
+        constexpr const char* kFlag = "--frames=";
+        if (std::strncmp(argv[i], kFlag, std::strlen(kFlag)) == 0 &&
+            std::atoi(argv[i] + std::strlen(kFlag)) > 0) {
+            g_frame_count = std::atoi(argv[i] + std::strlen(kFlag));
+        } else {
+            std::fprintf(stderr, "bench_update: unknown argument '%s' (expected --frames=N)\n",
+                         argv[i]);
+            return 1;
+        }
+    }
+    const rebraid::ObjectBvhUpdateSettings defaults;
+    benchmark::AddCustomContext("frames", std::to_string(g_frame_count));
+    benchmark::AddCustomContext("rebuild_sah_factor", std::to_string(defaults.rebuild_sah_factor));
+    benchmark::AddCustomContext(
+        "restructure",
+        "max_rebuilt_fraction=" + std::to_string(defaults.restructure.max_rebuilt_fraction) +
+            " min_subtree_prims=" + std::to_string(defaults.restructure.min_subtree_prims));
+    register_benchmarks();
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

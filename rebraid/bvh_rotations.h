@@ -1,0 +1,96 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rebraid/build_settings.h"
+#include "rebraid/object_bvh.h"
+#include "rebraid/scene.h"
+
+namespace rebraid {
+
+/// How leaves are treated by refit_and_rotate(), the two variants of Kopta et al. 2012.
+enum class RotationLeafMode {
+    /// The tree has one triangle per leaf (built with max_leaf_size = 1) and leaves are never
+    /// split or merged: rotations alone move triangles between subtrees (paper §2, §3.2, the
+    /// variant the paper settles on).
+    pre_split,
+    /// Leaves hold several triangles; a leaf splits in two when its node has a free slot and
+    /// the SAH falls, and a node whose children are all leaves collapses into one leaf when
+    /// that lowers the SAH (the wide form of merging sibling leaves, paper §2, §3.1).
+    split_merge,
+};
+
+/// Parameters of BvhRotator::refit_and_rotate().
+struct RotationSettings {
+    /// See RotationLeafMode.
+    RotationLeafMode leaf_mode = RotationLeafMode::pre_split;
+    /// split_merge: a collapse never makes a leaf with more triangles than this (1..16).
+    std::uint32_t max_leaf_size = 4;
+    /// Rotations applied per node and pass, each the best one at that node. Kopta applies
+    /// one; more converge faster after sudden motion at a proportional search cost.
+    int max_rotations_per_node = 1;
+    /// A rotation must lower the SAH by more than this fraction of the node's half area:
+    /// float noise must not make subtrees swap back and forth every frame.
+    float min_relative_gain = 1e-5f;
+    /// A node is searched for moves only when the summed half areas of its children grew by
+    /// more than this fraction since its last search (0: every node every pass, as Kopta).
+    /// Where the motion is slow, most nodes are then skipped at no loss of quality.
+    float min_growth_to_search = 0.0f;
+    /// Wide levels whose children run as parallel tasks (as RefitSettings).
+    int parallel_depth = 3;
+    /// Deepest nesting of inner nodes a rotation may create; traversal stacks are sized
+    /// for kMaxBvhDepth.
+    int max_depth = kMaxBvhDepth;
+
+    /// Throws rebraid::Error naming the field and value when a setting is out of range.
+    void validate() const;
+};
+
+/// What one refit-and-rotate pass did.
+struct RotationPassStats {
+    double sah = 0.0;             ///< SAH after the pass (as object_bvh_sah())
+    std::uint64_t swaps = 0;      ///< child <-> grandchild swaps
+    std::uint64_t pull_ups = 0;   ///< grandchildren moved into a free slot of their grandparent
+    std::uint64_t exchanges = 0;  ///< grandchild <-> grandchild exchanges under two children
+    std::uint64_t splits = 0;     ///< split_merge: leaves split in two
+    std::uint64_t merges = 0;     ///< split_merge: all-leaf nodes collapsed into one leaf
+};
+
+/// Refit plus tree rotations in the same bottom-up pass (Kopta et al. 2012, §2), on the
+/// project's 8-wide nodes. At each inner node N, after its children are refit (and rotated),
+/// the pass applies the move that lowers the SAH most, up to max_rotations_per_node times.
+/// Moves exchange whole subtrees between N's children and grandchildren, so only the boxes of
+/// the one or two children they touch change, and the SAH changes by exactly those boxes'
+/// change in half area (every other node keeps its box; N's box is the union of the same
+/// triangles):
+/// - swap: a child C of N trades places with a grandchild g under another child G (N's slot
+///   of C takes g, G's slot of g takes C): Kensler's child/grandchild rotation, all 7 x 8
+///   (C, g) pairs of each inner child G tried;
+/// - exchange: grandchildren under two different children G and G2 trade places: Kensler's
+///   compound grandchild/grandchild rotation, and on wide trees the move that trades
+///   triangles between sibling bottom nodes. Each side's outlier (the child whose leaving
+///   shrinks it most) is tried against every child of the other side;
+/// - pull-up: when N has a free slot, a grandchild moves up into it; G shrinks and nothing
+///   grows, so the SAH never rises (binary trees have no free slots, so no such move there).
+/// A move's gain is bounded by how much G can shrink by losing one child, which prunes most of
+/// the search. The pass is deterministic (the decisions at N depend only on N's subtree) and
+/// keeps every triangle in exactly one leaf and the nesting within max_depth. Keeps per-node
+/// heights and searched areas between calls (no allocation after the first call on a tree of
+/// the same size).
+class BvhRotator {
+public:
+    /// Refits `bvh` to `mesh` (see refit_object_bvh) and rotates in the same pass.
+    /// Throws rebraid::Error on invalid settings or a mesh of another triangle count.
+    RotationPassStats refit_and_rotate(const Mesh& mesh, ObjectBvh& bvh,
+                                       const RotationSettings& settings = {});
+
+    /// Forgets what was searched: call after the tree was replaced (e.g. rebuilt).
+    void reset();
+
+private:
+    std::vector<std::uint8_t> heights_;  ///< per node id: inner levels of its subtree
+    std::vector<float> searched_areas_;  ///< per node id: children's areas at its last search
+};
+
+}  // namespace rebraid

@@ -1,0 +1,47 @@
+# The installed package, used from an outside project (run by ctest as
+# InstallPackage.OutsideProjectBuildsAndRuns, label `install`):
+#   1. cmake --install the build tree into a scratch prefix;
+#   2. configure examples/dropin against it with find_package(rebraid CONFIG REQUIRED);
+#   3. build it and run `dropin_example --check`, which traces the same rays through Embree,
+#      EmbreeAccel and the user-geometry scene, before and after an update;
+#   4. run the installed `rebraid` command.
+# Inputs: REBRAID_BUILD_DIR, REBRAID_SOURCE_DIR, REBRAID_WORK_DIR, REBRAID_GENERATOR.
+foreach(variable REBRAID_BUILD_DIR REBRAID_SOURCE_DIR REBRAID_WORK_DIR REBRAID_GENERATOR)
+    if(NOT DEFINED ${variable})
+        message(FATAL_ERROR "install_test.cmake: -D${variable}=... is required")
+    endif()
+endforeach()
+
+set(prefix ${REBRAID_WORK_DIR}/prefix)
+set(consumer ${REBRAID_WORK_DIR}/consumer)
+file(REMOVE_RECURSE ${REBRAID_WORK_DIR})
+file(MAKE_DIRECTORY ${REBRAID_WORK_DIR})
+
+function(run step)
+    execute_process(COMMAND ${ARGN} RESULT_VARIABLE result OUTPUT_VARIABLE output
+                    ERROR_VARIABLE output)
+    if(NOT result EQUAL 0)
+        message(FATAL_ERROR "${step} failed (${result}):\n${output}")
+    endif()
+    message(STATUS "${step}: ok")
+    set(last_output "${output}" PARENT_SCOPE)
+endfunction()
+
+run("install" ${CMAKE_COMMAND} --install ${REBRAID_BUILD_DIR} --prefix ${prefix})
+foreach(installed include/rebraid/embree.h include/rebraid/scene.h
+        include/embree_glue/embree_accel.h lib/cmake/rebraid/rebraidConfig.cmake bin/rebraid)
+    if(NOT EXISTS ${prefix}/${installed})
+        message(FATAL_ERROR "install: ${prefix}/${installed} is missing")
+    endif()
+endforeach()
+
+run("configure the outside project" ${CMAKE_COMMAND} -S ${REBRAID_SOURCE_DIR}/examples/dropin
+    -B ${consumer} -G ${REBRAID_GENERATOR} -DCMAKE_BUILD_TYPE=Release
+    -DCMAKE_PREFIX_PATH=${prefix})
+run("build the outside project" ${CMAKE_COMMAND} --build ${consumer})
+run("run the outside project" ${consumer}/dropin_example --check)
+if(NOT last_output MATCHES "check passed")
+    message(FATAL_ERROR "dropin_example --check did not pass:\n${last_output}")
+endif()
+message(STATUS "${last_output}")
+run("run the installed rebraid command" ${prefix}/bin/rebraid --help)

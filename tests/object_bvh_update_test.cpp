@@ -1,0 +1,472 @@
+// Updating the BVH of a deforming mesh: every strategy keeps a valid tree (each triangle in
+// one leaf, boxes containing their children, the same hits as a fresh build, the same
+// structure on any thread count); rotations never do worse than refit; restructuring repairs
+// a degraded tree; auto rebuilds past its factor.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "hit_comparison.h"
+#include "reachability.h"
+#include "rebraid/bvh_stats.h"
+#include "rebraid/error.h"
+#include "rebraid/instanced_accel.h"
+#include "rebraid/mesh_generators.h"
+#include "rebraid/object_bvh_update.h"
+#include "rebraid/random.h"
+#include "rebraid/random_rays.h"
+#include "rebraid/structure_hash.h"
+#include "rebraid/two_level_builder.h"
+
+namespace rebraid {
+namespace {
+
+Mesh rest_mesh() {
+    return make_torus_knot({.path_segment_count = 192, .tube_segment_count = 10});
+}
+
+/// The rest mesh at animation time t: twisted about Y, then each vertex thrown along its own
+/// random direction by `explode` * t (incoherent motion, what degrades a refit tree).
+Mesh deformed(const Mesh& rest, float t, float explode = 0.6f) {
+    Mesh mesh = rest;
+    Random random(99);
+    for (Vec3f& p : mesh.positions) {
+        const float angle = 1.5f * t * p.y;
+        const float c = std::cos(angle), s = std::sin(angle);
+        p = {c * p.x + s * p.z, p.y, -s * p.x + c * p.z};
+        const Vec3f direction{random.next_float(-1, 1), random.next_float(-1, 1),
+                              random.next_float(-1, 1)};
+        p = p + direction * (explode * t);
+    }
+    return mesh;
+}
+
+/// The rest mesh with its own three corners per triangle (so triangles can move apart).
+Mesh unwelded(const Mesh& rest) {
+    Mesh mesh;
+    mesh.name = rest.name + " unwelded";
+    for (std::uint32_t prim = 0; prim < rest.triangles.size(); ++prim) {
+        const auto base = std::uint32_t(mesh.positions.size());
+        for (const Vec3f& corner : rest.corners(prim)) mesh.positions.push_back(corner);
+        mesh.triangles.push_back({base, base + 1, base + 2});
+    }
+    return mesh;
+}
+
+/// Each triangle of an unwelded mesh moved rigidly by `blend` of the way to another
+/// triangle's place: triangles stay small but their neighbours change, the worst case for
+/// a tree built on the rest pose.
+Mesh shuffled(const Mesh& unwelded_rest, float blend) {
+    Mesh mesh = unwelded_rest;
+    const auto count = std::uint32_t(mesh.triangles.size());
+    Random random(7);
+    std::vector<std::uint32_t> other(count);
+    for (std::uint32_t i = 0; i < count; ++i) other[i] = i;
+    for (std::uint32_t i = count; i > 1; --i) std::swap(other[i - 1], other[random.next_below(i)]);
+    const auto center = [&](std::uint32_t prim) {
+        const auto c = unwelded_rest.corners(prim);
+        return (c[0] + c[1] + c[2]) * (1.0f / 3.0f);
+    };
+    for (std::uint32_t prim = 0; prim < count; ++prim) {
+        const Vec3f offset = (center(other[prim]) - center(prim)) * blend;
+        for (std::uint32_t vertex : mesh.triangles[prim])
+            mesh.positions[vertex] = mesh.positions[vertex] + offset;
+    }
+    return mesh;
+}
+
+/// Checks the child boxes below `ref` contain their subtree; returns the subtree's depth.
+int check_subtree(const ObjectBvh& bvh, NodeRef ref, const BBox3f& box, std::vector<int>& reached,
+                  std::size_t& errors) {
+    if (ref.is_leaf()) {
+        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i) {
+            ++reached[bvh.prim_ids[i]];
+            BBox3f tri;
+            tri.extend(bvh.triangles[i].v0), tri.extend(bvh.triangles[i].v1);
+            tri.extend(bvh.triangles[i].v2);
+            if (!box.contains(tri) && ++errors <= 5)
+                ADD_FAILURE() << "leaf box misses triangle at leaf-order " << i;
+        }
+        return 0;
+    }
+    const WideNode& node = bvh.nodes[ref.node_id()];
+    if (!box.contains(node.bounds()) && ++errors <= 5)
+        ADD_FAILURE() << "node " << ref.node_id() << " is not inside its parent's box";
+    int depth = 0, count = node.child_count();
+    if (count < 1 && ++errors <= 5) ADD_FAILURE() << "node " << ref.node_id() << " is empty";
+    for (int slot = count; slot < kBvhWidth; ++slot)
+        if (!node.children[slot].is_empty() && ++errors <= 5)
+            ADD_FAILURE() << "node " << ref.node_id() << " has a used slot after a free one";
+    for (int slot = 0; slot < count; ++slot)
+        depth = std::max(depth, check_subtree(bvh, node.children[slot], node.child_bounds(slot),
+                                              reached, errors));
+    return depth + 1;
+}
+
+/// The tree is valid for `mesh`: each triangle in exactly one leaf, triangle copies equal to
+/// the mesh's, every box containing what is below it, nesting within kMaxBvhDepth.
+void expect_valid(const Mesh& mesh, const ObjectBvh& bvh) {
+    ASSERT_EQ(bvh.prim_ids.size(), mesh.triangles.size());
+    ASSERT_EQ(bvh.triangles.size(), mesh.triangles.size());
+    std::size_t errors = 0;
+    for (std::size_t i = 0; i < bvh.prim_ids.size(); ++i) {
+        const auto corners = mesh.corners(bvh.prim_ids[i]);
+        const TriangleVerts& copy = bvh.triangles[i];
+        if ((copy.v0 != corners[0] || copy.v1 != corners[1] || copy.v2 != corners[2]) &&
+            ++errors <= 5)
+            ADD_FAILURE() << "stale triangle copy at leaf-order " << i;
+    }
+    std::vector<int> reached(mesh.triangles.size(), 0);
+    const int depth = check_subtree(bvh, bvh.root, bvh.bounds, reached, errors);
+    EXPECT_LE(depth, kMaxBvhDepth);
+    for (std::size_t p = 0; p < reached.size(); ++p)
+        if (reached[p] != 1 && ++errors <= 5)
+            ADD_FAILURE() << "prim " << p << " reached " << reached[p] << " times";
+    EXPECT_EQ(errors, 0u);
+    EXPECT_EQ(bvh.bounds, mesh.bounds());
+}
+
+/// The updated tree answers 4000 random rays as a fresh two-level build of the same frame.
+void expect_hits_of_fresh_build(const Mesh& mesh, const ObjectBvh& bvh) {
+    Scene scene;
+    scene.meshes.push_back(mesh);
+    scene.instances.push_back({0, AffineTransform::identity()});
+    std::vector<ObjectBvh> bvhs{bvh};
+    TopLevelBvh top = build_two_level(scene, bvhs);
+    const InstancedAccel updated(scene, std::move(bvhs), std::move(top), AccelStats{});
+    const InstancedAccel fresh = build_two_level_accel(scene);
+    const std::vector<Ray> rays = generate_random_rays(mesh.bounds(), 4000, 5);
+    test::expect_same_answers(test::trace_all(fresh, rays), test::trace_all(updated, rays),
+                              test::tolerance_for(mesh.bounds()));
+}
+
+ObjectBvhUpdateSettings with_strategy(UpdateStrategy strategy) {
+    ObjectBvhUpdateSettings settings;
+    settings.strategy = strategy;
+    return settings;
+}
+
+std::uint64_t structure_hash(const ObjectBvh& bvh) {
+    StructureHash hash;
+    hash.add<WideNode>(bvh.nodes);
+    hash.add_value(bvh.root);
+    hash.add<PrimId>(bvh.prim_ids);
+    hash.add<TriangleVerts>(bvh.triangles);
+    return hash.value();
+}
+
+struct StrategyCase {
+    std::string name;
+    ObjectBvhUpdateSettings settings;
+};
+
+std::vector<StrategyCase> strategy_cases() {
+    std::vector<StrategyCase> cases;
+    for (UpdateStrategy strategy :
+         {UpdateStrategy::rebuild, UpdateStrategy::refit, UpdateStrategy::rotate,
+          UpdateStrategy::restructure, UpdateStrategy::automatic}) {
+        ObjectBvhUpdateSettings settings;
+        settings.strategy = strategy;
+        // Small subtrees qualify, so restructuring acts on this small mesh.
+        settings.restructure.min_subtree_prims = 16;
+        std::string name(update_strategy_name(strategy));
+        cases.push_back({name, settings});
+        if (strategy == UpdateStrategy::restructure) {
+            settings.restructure_rotates = true;  // pre-split, scattered leaf positions
+            cases.push_back({"restructure_rotates", settings});
+            settings.restructure_rotates = false;
+        }
+        if (strategy == UpdateStrategy::rotate) {
+            settings.rotation.min_growth_to_search = 0.01f;
+            settings.rotation.max_rotations_per_node = 3;
+            cases.push_back({"rotate_lazy_three_per_node", settings});
+            settings.rotation = {};
+            settings.rotation.leaf_mode = RotationLeafMode::split_merge;
+            cases.push_back({"rotate_split_merge", settings});
+        }
+    }
+    return cases;
+}
+
+/// Builds on the rest pose, then updates through `frames` deformed frames; returns the BVH.
+ObjectBvh animate(const Mesh& rest, const ObjectBvhUpdateSettings& settings, int frames,
+                  std::vector<ObjectBvhUpdateReport>* reports = nullptr) {
+    ObjectBvh bvh = build_object_bvh(rest);
+    ObjectBvhUpdater updater(settings);
+    for (int frame = 1; frame <= frames; ++frame) {
+        const ObjectBvhUpdateReport report =
+            updater.update(deformed(rest, float(frame) / float(frames)), bvh);
+        if (reports) reports->push_back(report);
+    }
+    return bvh;
+}
+
+class EveryStrategy : public testing::TestWithParam<StrategyCase> {};
+
+TEST_P(EveryStrategy, KeepsAValidTreeEveryFrame) {
+    const Mesh rest = rest_mesh();
+    ObjectBvh bvh = build_object_bvh(rest);
+    ObjectBvhUpdater updater(GetParam().settings);
+    for (int frame = 1; frame <= 6; ++frame) {
+        SCOPED_TRACE("frame " + std::to_string(frame));
+        const Mesh mesh = deformed(rest, float(frame) / 6.0f);
+        const ObjectBvhUpdateReport report = updater.update(mesh, bvh);
+        expect_valid(mesh, bvh);
+        EXPECT_NEAR(report.sah, object_bvh_sah(bvh), 1e-5 * report.sah);
+        EXPECT_NE(report.applied, UpdateStrategy::automatic);
+        EXPECT_GE(report.update_ms, 0.0);
+    }
+}
+
+TEST_P(EveryStrategy, HitsEqualAFreshBuildAfterDeforming) {
+    const Mesh rest = rest_mesh();
+    const ObjectBvh bvh = animate(rest, GetParam().settings, 5);
+    expect_hits_of_fresh_build(deformed(rest, 1.0f), bvh);
+}
+
+TEST_P(EveryStrategy, SameStructureOnOneTwoAndEightThreads) {
+    const Mesh rest = rest_mesh();
+    std::vector<std::uint64_t> hashes;
+    // Let an arena really have 8 threads on a machine with fewer cores.
+    const tbb::global_control allow_eight(tbb::global_control::max_allowed_parallelism, 8);
+    for (int threads : {1, 2, 8}) {
+        tbb::task_arena arena(threads);
+        arena.execute(
+            [&] { hashes.push_back(structure_hash(animate(rest, GetParam().settings, 4))); });
+    }
+    EXPECT_EQ(hashes[0], hashes[1]);
+    EXPECT_EQ(hashes[0], hashes[2]);
+}
+
+INSTANTIATE_TEST_SUITE_P(ObjectBvhUpdate, EveryStrategy, testing::ValuesIn(strategy_cases()),
+                         [](const testing::TestParamInfo<StrategyCase>& info) {
+                             return info.param.name;
+                         });
+
+TEST(BvhRotator, NeverRaisesSahOverRefitOfTheSameFrame) {
+    const Mesh rest = rest_mesh();
+    for (RotationLeafMode mode : {RotationLeafMode::pre_split, RotationLeafMode::split_merge}) {
+        RotationSettings settings;
+        settings.leaf_mode = mode;
+        ObjectBvh bvh = build_object_bvh(
+            rest, {.max_leaf_size = mode == RotationLeafMode::pre_split ? 1u : 4u});
+        BvhRotator rotator;
+        double total_gain = 0.0;
+        for (int frame = 1; frame <= 5; ++frame) {
+            const Mesh mesh = deformed(rest, float(frame) / 5.0f);
+            ObjectBvh refit_only = bvh;
+            const double refit_sah = refit_object_bvh(mesh, refit_only);
+            const RotationPassStats stats = rotator.refit_and_rotate(mesh, bvh, settings);
+            const double rotated_sah = object_bvh_sah(bvh);
+            EXPECT_LE(rotated_sah, refit_sah * (1.0 + 1e-6)) << "frame " << frame;
+            EXPECT_NEAR(stats.sah, rotated_sah, 1e-5 * rotated_sah);
+            total_gain += refit_sah - rotated_sah;
+            EXPECT_GT(stats.swaps + stats.exchanges + stats.pull_ups + stats.splits + stats.merges,
+                      0u);
+        }
+        EXPECT_GT(total_gain, 0.0);
+    }
+}
+
+TEST(BvhRotator, RotationsFromTheRestPoseKeepTheTree) {
+    // With nothing moved, a pass only refits and applies strictly improving moves: the
+    // triangles and the root box stay the same.
+    const Mesh rest = rest_mesh();
+    ObjectBvh bvh = build_object_bvh(rest, {.max_leaf_size = 1});
+    const double built_sah = object_bvh_sah(bvh);
+    BvhRotator rotator;
+    const RotationPassStats stats = rotator.refit_and_rotate(rest, bvh);
+    EXPECT_LE(stats.sah, built_sah * (1.0 + 1e-6));
+    expect_valid(rest, bvh);
+}
+
+TEST(BvhRotator, RespectsTheDepthLimit) {
+    const Mesh rest = unwelded(rest_mesh());
+    ObjectBvh bvh = build_object_bvh(rest, {.max_leaf_size = 1});
+    RotationSettings settings;
+    settings.max_depth = 6;
+    settings.max_rotations_per_node = 4;
+    BvhRotator rotator;
+    for (int frame = 1; frame <= 4; ++frame) {
+        const Mesh mesh = shuffled(rest, float(frame) / 4.0f);
+        rotator.refit_and_rotate(mesh, bvh, settings);
+        expect_valid(mesh, bvh);
+    }
+    // The builder's tree of 3840 triangles is 4-5 levels deep; rotations may deepen it to
+    // the limit but not past it.
+    std::vector<int> reached(rest.triangles.size(), 0);
+    std::size_t errors = 0;
+    EXPECT_LE(check_subtree(bvh, bvh.root, bvh.bounds, reached, errors), 6);
+}
+
+TEST(SelectiveRestructurer, LowersTheSahOfABadlyDegradedTree) {
+    const Mesh rest = unwelded(rest_mesh());
+    const Mesh mesh = shuffled(rest, 0.5f);
+    ObjectBvh bvh = build_object_bvh(rest);
+    const double refit_sah = refit_object_bvh(mesh, bvh);
+    const double rebuilt_sah = object_bvh_sah(build_object_bvh(mesh));
+    ASSERT_GT(refit_sah, 2.0 * rebuilt_sah) << "the shuffle should degrade the refit tree";
+    SelectiveRestructurer restructurer;
+    RestructureSettings settings;
+    settings.min_subtree_prims = 16;
+    settings.max_rebuilt_fraction = 0.5;
+    const RestructureStats stats = restructurer.restructure(mesh, bvh, settings);
+    expect_valid(mesh, bvh);
+    const double restructured_sah = object_bvh_sah(bvh);
+    EXPECT_NEAR(stats.sah, restructured_sah, 1e-5 * restructured_sah);
+    EXPECT_GT(stats.subtrees_rebuilt, 0u);
+    EXPECT_LE(stats.prims_rebuilt, mesh.triangles.size() / 2);
+    EXPECT_LT(restructured_sah, 0.9 * refit_sah);
+    expect_hits_of_fresh_build(mesh, bvh);
+}
+
+TEST(SelectiveRestructurer, NeverRaisesTheSah) {
+    const Mesh rest = rest_mesh();
+    ObjectBvh bvh = build_object_bvh(rest);
+    SelectiveRestructurer restructurer;
+    for (int frame = 1; frame <= 4; ++frame) {
+        const Mesh mesh = deformed(rest, float(frame) / 4.0f);
+        const double refit_sah = refit_object_bvh(mesh, bvh);
+        RestructureSettings settings;
+        settings.min_subtree_prims = 16;
+        restructurer.restructure(mesh, bvh, settings);
+        EXPECT_LE(object_bvh_sah(bvh), refit_sah * (1.0 + 1e-6)) << "frame " << frame;
+    }
+}
+
+TEST(SelectiveRestructurer, RebuildsScatteredPreSplitSubtreesAfterRotations) {
+    // Rotations move single-triangle leaves between subtrees, so a subtree's triangles no
+    // longer occupy one leaf-order range; the rebuild must reuse exactly their positions.
+    const Mesh rest = unwelded(rest_mesh());
+    ObjectBvh bvh = build_object_bvh(rest, {.max_leaf_size = 1});
+    BvhRotator rotator;
+    for (int frame = 1; frame <= 3; ++frame)
+        rotator.refit_and_rotate(shuffled(rest, 0.1f * frame), bvh);
+    const Mesh mesh = shuffled(rest, 0.5f);
+    const double rotated_sah = rotator.refit_and_rotate(mesh, bvh).sah;
+    SelectiveRestructurer restructurer;
+    RestructureSettings settings;
+    settings.min_subtree_prims = 16;
+    settings.max_rebuilt_fraction = 0.5;
+    const RestructureStats stats = restructurer.restructure(mesh, bvh, settings);
+    EXPECT_GT(stats.scattered_subtrees_rebuilt, 0u);
+    EXPECT_LT(stats.sah, rotated_sah);
+    expect_valid(mesh, bvh);
+    test::for_each_leaf(bvh.nodes, bvh.root,
+                        [&](NodeRef leaf) { EXPECT_EQ(leaf.prim_count(), 1u); });
+    expect_hits_of_fresh_build(mesh, bvh);
+}
+
+TEST(ObjectBvhUpdater, AutoRebuildsOncePastTheFactor) {
+    const Mesh rest = unwelded(rest_mesh());
+    ObjectBvhUpdateSettings settings;
+    settings.strategy = UpdateStrategy::automatic;
+    settings.rebuild_sah_factor = 1.3;
+    ObjectBvh bvh = build_object_bvh(rest);
+    ObjectBvhUpdater updater(settings);
+    // The first update of a tree that is not pre-split rebuilds it pre-split (auto rotates).
+    EXPECT_EQ(updater.update(rest, bvh).applied, UpdateStrategy::rebuild);
+    // Nothing moved: rotations suffice.
+    ObjectBvhUpdateReport report = updater.update(rest, bvh);
+    EXPECT_EQ(report.applied, UpdateStrategy::rotate);
+    EXPECT_LE(report.sah_over_rebuild, 1.0 + 1e-6);
+    // A shuffle passes any reasonable factor: rebuilt, and the new tree is the reference.
+    const Mesh mesh = shuffled(rest, 1.0f);
+    ObjectBvh refit_copy = bvh;
+    ASSERT_GT(refit_object_bvh(mesh, refit_copy), 1.3 * object_bvh_sah(bvh));
+    report = updater.update(mesh, bvh);
+    EXPECT_EQ(report.applied, UpdateStrategy::rebuild);
+    EXPECT_DOUBLE_EQ(report.sah_over_rebuild, 1.0);
+    expect_valid(mesh, bvh);
+}
+
+TEST(ObjectBvhUpdater, AutoStaysWithinTheFactorWithoutRebuilding) {
+    const Mesh rest = rest_mesh();
+    for (double factor : {1.05, 1e9}) {
+        ObjectBvhUpdateSettings settings;
+        settings.strategy = UpdateStrategy::automatic;
+        settings.auto_rotates = false;  // refit only: its SAH grows with the explosion
+        settings.rebuild_sah_factor = factor;
+        std::vector<ObjectBvhUpdateReport> reports;
+        animate(rest, settings, 8, &reports);
+        int rebuilds = 0;
+        for (const ObjectBvhUpdateReport& report : reports) {
+            rebuilds += report.applied == UpdateStrategy::rebuild;
+            if (report.applied != UpdateStrategy::rebuild) {
+                EXPECT_LE(report.sah_over_rebuild, factor);
+            }
+        }
+        if (factor > 1e8) {
+            EXPECT_EQ(rebuilds, 0);
+        } else {
+            EXPECT_GT(rebuilds, 0);
+        }
+    }
+}
+
+TEST(ObjectBvhUpdater, RotatePreSplitRebuildsWithOneTrianglePerLeaf) {
+    const Mesh rest = rest_mesh();
+    ObjectBvh bvh = build_object_bvh(rest);
+    ObjectBvhUpdater updater(with_strategy(UpdateStrategy::rotate));
+    EXPECT_EQ(updater.rebuild_settings().max_leaf_size, 1u);
+    EXPECT_EQ(updater.update(rest, bvh).applied, UpdateStrategy::rebuild);
+    EXPECT_EQ(updater.update(deformed(rest, 0.5f), bvh).applied, UpdateStrategy::rotate);
+    std::vector<int> leaves_over_one;
+    test::for_each_leaf(bvh.nodes, bvh.root, [&](NodeRef leaf) {
+        if (leaf.prim_count() > 1) leaves_over_one.push_back(int(leaf.prim_count()));
+    });
+    EXPECT_TRUE(leaves_over_one.empty());
+}
+
+TEST(UpdateStrategy, NamesRoundTrip) {
+    for (UpdateStrategy strategy :
+         {UpdateStrategy::rebuild, UpdateStrategy::refit, UpdateStrategy::rotate,
+          UpdateStrategy::restructure, UpdateStrategy::automatic})
+        EXPECT_EQ(parse_update_strategy(update_strategy_name(strategy)), strategy);
+    EXPECT_EQ(update_strategy_name(UpdateStrategy::automatic), "auto");
+    EXPECT_THROW(parse_update_strategy("rotations"), Error);
+}
+
+TEST(ObjectBvhUpdater, RejectsBadSettingsAndAnotherMesh) {
+    ObjectBvhUpdateSettings settings;
+    settings.rebuild_sah_factor = 0.5;
+    EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
+    settings = {};
+    settings.rotation.max_leaf_size = 17;
+    EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
+    settings = {};
+    settings.restructure.max_rebuilt_fraction = 2.0;
+    EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
+    const Mesh rest = rest_mesh();
+    ObjectBvh bvh = build_object_bvh(rest);
+    ObjectBvhUpdater updater(with_strategy(UpdateStrategy::refit));
+    EXPECT_THROW(updater.update(make_box(), bvh), Error);
+    EXPECT_THROW(refit_object_bvh(make_box(), bvh), Error);
+}
+
+TEST(RefitObjectBvh, MatchesTheBoxesOfTheDeformedMesh) {
+    const Mesh rest = rest_mesh();
+    ObjectBvh bvh = build_object_bvh(rest);
+    const ObjectBvh built = bvh;
+    const Mesh mesh = deformed(rest, 0.7f);
+    const double sah = refit_object_bvh(mesh, bvh);
+    expect_valid(mesh, bvh);
+    EXPECT_NEAR(sah, object_bvh_sah(bvh), 1e-5 * sah);
+    // Same tree: the same references everywhere, only boxes and triangle copies changed.
+    ASSERT_EQ(bvh.nodes.size(), built.nodes.size());
+    for (std::size_t i = 0; i < bvh.nodes.size(); ++i)
+        for (int slot = 0; slot < kBvhWidth; ++slot)
+            EXPECT_EQ(bvh.nodes[i].children[slot], built.nodes[i].children[slot]);
+    EXPECT_EQ(bvh.prim_ids, built.prim_ids);
+    // Refitting back to the rest pose restores the built boxes exactly.
+    refit_object_bvh(rest, bvh);
+    EXPECT_EQ(structure_hash(bvh), structure_hash(built));
+}
+
+}  // namespace
+}  // namespace rebraid
