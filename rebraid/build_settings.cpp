@@ -26,6 +26,9 @@ void BuildSettings::validate() const {
     if (prims_per_bin < 1)
         throw Error("BuildSettings: prims_per_bin " + std::to_string(prims_per_bin) +
                     " must be >= 1");
+    if (max_children < 2 || max_children > std::uint32_t(kBvhWidth))
+        throw Error("BuildSettings: max_children " + std::to_string(max_children) +
+                    " is outside 2.." + std::to_string(kBvhWidth));
     if (task_threshold < 1)
         throw Error("BuildSettings: task_threshold " + std::to_string(task_threshold) +
                     " must be >= 1");

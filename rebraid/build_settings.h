@@ -3,6 +3,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "rebraid/wide_node.h"
+
 namespace rebraid {
 
 /// Parameters of the binned-SAH wide-BVH builder (object BVHs, the flat BVH and the top
@@ -35,6 +37,10 @@ struct BuildSettings {
     /// Fill wide nodes by also splitting children the binary SAH test would keep as leaves
     /// (any child of more than one prim, largest first).
     bool fill_nodes = true;
+    /// Children per node, 2..kBvhWidth. Nodes keep kBvhWidth slots and the traversal tests
+    /// all of them at once, so fewer children only make the tree deeper: a setting for
+    /// measuring what the 8-wide layout buys (bench/RESULTS.md, "Node width").
+    std::uint32_t max_children = kBvhWidth;
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

@@ -2,6 +2,7 @@
 
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -57,6 +58,34 @@ std::string format_number(double value) {
 bool skip_image_decoding(tinygltf::Image*, const int, std::string*, std::string*, int, int,
                          const unsigned char*, int, void*) {
     return true;  // geometry only: images are never decoded
+}
+
+/// Deepest nesting of JSON arrays and objects the loader accepts. tinygltf converts `extras`
+/// and `extensions` recursively, so a hostile file nested 100,000 levels deep overflowed the
+/// stack (tests/bad_input_test.cpp); real glTF files nest about ten levels.
+constexpr std::size_t kMaxJsonNesting = 512;
+
+/// Deepest nesting of arrays and objects in JSON `text` (brackets inside strings do not
+/// count); stops counting past `limit`.
+std::size_t json_nesting_depth(const unsigned char* text, std::size_t size, std::size_t limit) {
+    std::size_t depth = 0, deepest = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < size && deepest <= limit; ++i) {
+        const unsigned char c = text[i];
+        if (in_string) {
+            if (c == '\\')
+                ++i;  // the escaped character cannot end the string
+            else if (c == '"')
+                in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            deepest = std::max(deepest, ++depth);
+        } else if ((c == ']' || c == '}') && depth > 0) {
+            --depth;
+        }
+    }
+    return deepest;
 }
 
 std::uint32_t read_u32_le(const std::vector<unsigned char>& bytes, std::size_t at) {
@@ -150,8 +179,14 @@ private:
                                std::filesystem::path(path_).extension() == ".glb";
         std::string error, warning;
         bool ok = false;
+        if (is_binary) check_glb_layout(bytes);
+        const std::size_t json_offset = is_binary ? 20 : 0;
+        const std::size_t json_size = is_binary ? read_u32_le(bytes, 12) : bytes.size();
+        if (json_nesting_depth(bytes.data() + json_offset, json_size, kMaxJsonNesting) >
+            kMaxJsonNesting)
+            fail("malformed glTF: JSON nested deeper than " + std::to_string(kMaxJsonNesting) +
+                 " levels");
         if (is_binary) {
-            check_glb_layout(bytes);
             ok = parser.LoadBinaryFromMemory(&model_, &error, &warning, bytes.data(),
                                              static_cast<unsigned int>(bytes.size()), base_dir);
         } else {

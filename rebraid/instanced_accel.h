@@ -29,6 +29,9 @@ public:
 
     const TopLevelBvh& top_level() const { return top_; }
     const std::vector<ObjectBvh>& object_bvhs() const { return object_bvhs_; }
+    /// Hands the object BVHs back, e.g. to update them for the next frame of an animation
+    /// without copying the static ones; the structure is then fit only for destruction.
+    std::vector<ObjectBvh> release_object_bvhs() && { return std::move(object_bvhs_); }
     /// Mesh of each instance (index = InstanceId).
     const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
 

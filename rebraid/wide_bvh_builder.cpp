@@ -171,7 +171,7 @@ public:
         std::array<Candidate, kBvhWidth> kids;
         int kid_count = 0;
         for (const Candidate& half : split(c, median_only)) kids[kid_count++] = half;
-        while (kid_count < kBvhWidth) {
+        while (kid_count < int(settings_.max_children)) {
             int pick = -1;
             float largest = -1.0f;
             for (int i = 0; i < kid_count; ++i)

@@ -484,7 +484,7 @@ TEST(GltfAnimationErrors, ModelAnimationIndexAndScene) {
 
 /// The two-joint skin rig with a 30,000-vertex mesh: every vertex split between the joints by
 /// its own weight, plus a morph target animated alongside.
-std::string write_large_skin_file() {
+std::string write_large_skin_file(const std::string& name) {
     constexpr std::size_t kVertexCount = 30'000;
     GltfTestFile file;
     std::vector<Vec3f> positions, deltas;
@@ -512,11 +512,11 @@ std::string write_large_skin_file() {
     add_channel_animation(file, 2, "rotation", {0, 1}, concat(z_rotation(0), z_rotation(120)),
                           "VEC4");
     add_channel_animation(file, 0, "weights", {0, 1}, {0, 1}, "SCALAR");
-    return file.write_glb("anim_large.glb");
+    return file.write_glb(name);
 }
 
 TEST(GltfAnimation, ParallelPosingMatchesSerialOnAnyThreadCount) {
-    const GltfLoadResult loaded = load_animated(write_large_skin_file());
+    const GltfLoadResult loaded = load_animated(write_large_skin_file("anim_large_0.glb"));
     const GltfAnimator parallel(loaded, {.animation = -1, .parallel_grain = 256});
     const GltfAnimator serial(loaded, {.animation = -1, .parallel_grain = 1'000'000});
     auto pose = [&](const GltfAnimator& animator, int threads) {
@@ -536,7 +536,7 @@ TEST(GltfAnimation, ParallelPosingMatchesSerialOnAnyThreadCount) {
 }
 
 TEST(GltfAnimation, ConcurrentPosesOfDistinctScenes) {
-    const GltfLoadResult loaded = load_animated(write_large_skin_file());
+    const GltfLoadResult loaded = load_animated(write_large_skin_file("anim_large_1.glb"));
     const GltfAnimator animator(loaded, {.animation = -1, .parallel_grain = 512});
     const float times[2] = {0.3f, 0.9f};
     Scene expected[2] = {loaded.scene, loaded.scene};

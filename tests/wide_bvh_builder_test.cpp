@@ -72,6 +72,37 @@ TEST(WideBvhBuilder, EveryPrimReachableOnceAndBoxesNest) {
     EXPECT_GT(bvh.nodes.size(), 20000u / 32);
 }
 
+/// Largest child count of any node of `bvh`.
+int widest_node(const WideBvh& bvh) {
+    int widest = 0;
+    for (const WideNode& node : bvh.nodes) widest = std::max(widest, node.child_count());
+    return widest;
+}
+
+TEST(WideBvhBuilder, MaxChildrenNarrowsNodesAndFillNodesFillsThem) {
+    const Mesh mesh = test::make_triangle_soup(20000, 2);
+    for (std::uint32_t width : {2u, 4u, 8u}) {
+        std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
+        const WideBvh bvh = build_wide_bvh(prims, {.max_children = width});
+        expect_valid_tree(bvh, prims, BuildSettings{}.max_leaf_size);
+        EXPECT_EQ(widest_node(bvh), int(width));
+    }
+    // Full nodes: fewer, fuller nodes than when children the binary SAH test would keep as
+    // leaves stay unsplit.
+    std::vector<BuildPrim> full_prims = make_triangle_build_prims(mesh);
+    std::vector<BuildPrim> sparse_prims = full_prims;
+    const WideBvh full = build_wide_bvh(full_prims, {.fill_nodes = true});
+    const WideBvh sparse = build_wide_bvh(sparse_prims, {.fill_nodes = false});
+    expect_valid_tree(full, full_prims, BuildSettings{}.max_leaf_size);
+    expect_valid_tree(sparse, sparse_prims, BuildSettings{}.max_leaf_size);
+    auto mean_children = [](const WideBvh& bvh) {
+        double sum = 0;
+        for (const WideNode& node : bvh.nodes) sum += node.child_count();
+        return sum / double(bvh.nodes.size());
+    };
+    EXPECT_GT(mean_children(full), mean_children(sparse));
+}
+
 TEST(WideBvhBuilder, IdenticalCentroidsStillSplitIntoSmallLeaves) {
     // Every triangle the same: no SAH split separates them; index splits must.
     std::vector<BuildPrim> prims(1000, BuildPrim{{{0, 0, 0}, {1, 1, 1}}, 0, 1});
@@ -285,6 +316,8 @@ TEST(BuildSettings, RejectsOutOfRangeValues) {
     EXPECT_THROW((BuildSettings{.intersection_cost = 0.0f}.validate()), Error);
     EXPECT_THROW((BuildSettings{.task_threshold = 0}.validate()), Error);
     EXPECT_THROW((BuildSettings{.prims_per_bin = 0}.validate()), Error);
+    EXPECT_THROW((BuildSettings{.max_children = 1}.validate()), Error);
+    EXPECT_THROW((BuildSettings{.max_children = 9}.validate()), Error);
     EXPECT_NO_THROW(BuildSettings{}.validate());
 }
 

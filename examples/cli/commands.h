@@ -37,5 +37,6 @@ void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& act
 void add_rays_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 void add_generate_command(CLI::App& app, CommonOptions& common, CommandAction& action);
+void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 
 }  // namespace rebraid::cli

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
     add_rays_command(app, common, action);
     add_bench_command(app, common, action);
     add_generate_command(app, common, action);
+    add_animate_command(app, common, action);
 
     try {
         app.parse(argc, argv);

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 
 #include "rebraid/default_scene.h"
 #include "rebraid/error.h"
+#include "rebraid/gltf_animation.h"
 #include "rebraid/gltf_scene.h"
 
 namespace rebraid::cli {
@@ -39,6 +41,19 @@ Scene load_scene(const std::string& path) {
     Scene scene = load_gltf_scene(path);
     scene.validate();
     return scene;
+}
+
+Scene load_scene_at_time(const std::string& path, float time, int animation) {
+    if (!std::isfinite(time))
+        throw Error("--time " + std::to_string(time) + " is not a finite number of seconds");
+    if (path.empty()) return load_scene(path);
+    load_scene(path);  // the common messages for missing, misnamed or broken files
+    GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
+    const GltfAnimator animator(loaded,
+                                GltfAnimationSettings{.animation = animation, .file_label = path});
+    animator.apply(time, loaded.scene);
+    loaded.scene.validate();
+    return std::move(loaded.scene);
 }
 
 std::string describe_scene(const std::string& path) {

@@ -11,6 +11,12 @@ namespace rebraid::cli {
 /// rebraid::Error naming the file when it is missing, has another extension or fails to load.
 Scene load_scene(const std::string& path);
 
+/// As load_scene(), then poses the scene at `time` seconds of its glTF animation number
+/// `animation` (-1: all at once), as GltfAnimator::apply does: skinned and morphed meshes
+/// deformed, animated nodes moved. The default scene has no animation and is returned as is.
+/// Throws rebraid::Error naming the file for bad animation data or a non-finite time.
+Scene load_scene_at_time(const std::string& path, float time, int animation = 0);
+
 /// How messages name the scene: the path, or "default scene".
 std::string describe_scene(const std::string& path);
 

@@ -62,9 +62,11 @@ void run_stats(const StatsOptions& options) {
         if (entry.has_object_bvhs)
             json["object_builder"] = object_builder_name(options.accel_options.object_builder);
         json.update(stats_to_json(stats));
+        json["peak_rss_bytes"] = peak_rss_bytes();
         std::cout << json.dump(2) << "\n";
     } else {
         print_stats_text(std::cout, describe_scene(options.scene_path), options.accel_name, stats);
+        std::cout << std::left << std::setw(16) << "peak_rss_bytes" << peak_rss_bytes() << "\n";
     }
 }
 
@@ -83,8 +85,8 @@ void add_stats_command(CLI::App& app, CommonOptions& common, CommandAction& acti
     add_accel_option(*command, options->accel_name);
     add_accel_build_options(*command, options->accel_options);
     command->add_flag("--json", options->is_json,
-                      "print one JSON object (keys as the AccelStats fields, plus scene and "
-                      "accel)");
+                      "print one JSON object (keys as the AccelStats fields, plus scene, "
+                      "accel and peak_rss_bytes: the process's peak resident memory)");
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_stats(*options); }; });
 }

@@ -1,8 +1,16 @@
 #include "stats_json.h"
 
+#include <sys/resource.h>
+
 #include <string>
 
 namespace rebraid::cli {
+
+std::uint64_t peak_rss_bytes() {
+    rusage usage{};
+    if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+    return std::uint64_t(usage.ru_maxrss) * 1024u;
+}
 
 nlohmann::ordered_json stats_to_json(const AccelStats& stats) {
     nlohmann::ordered_json json = nlohmann::ordered_json::object();

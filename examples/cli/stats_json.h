@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string_view>
@@ -32,6 +33,11 @@ template <class T>
 struct IsOptional : std::false_type {};
 template <class T>
 struct IsOptional<std::optional<T>> : std::true_type {};
+
+/// Peak resident memory of this process so far, in bytes (getrusage's ru_maxrss, which Linux
+/// reports in KiB). `rebraid stats` reads it after the build, so it covers loading the scene
+/// and building the structure.
+std::uint64_t peak_rss_bytes();
 
 /// One JSON member per AccelStats field, in declaration order; empty optional fields are
 /// left out.

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 #include <CLI/CLI.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,7 +22,8 @@ struct TraceOptions {
     std::vector<std::string> paths;
     std::string accel_name;
     AccelOptions accel_options;
-    std::string hits_path;  ///< empty: standard output
+    std::string hits_path;      ///< empty: standard output
+    std::optional<float> time;  ///< --time: pose the glTF animation at this many seconds
 };
 
 /// CLI11 writes a positional taking one or two values as "NAME(1x)" in the usage line; the
@@ -42,7 +44,8 @@ void run_trace(const TraceOptions& options) {
     find_accel(options.accel_name);
     // Read the rays before the (slower) build so a bad ray file fails fast.
     const std::vector<Ray> rays = read_ray_file(rays_path);
-    const Scene scene = load_scene(scene_path);
+    const Scene scene =
+        options.time ? load_scene_at_time(scene_path, *options.time) : load_scene(scene_path);
     const std::unique_ptr<Accel> accel =
         build_accel(options.accel_name, scene, options.accel_options);
 
@@ -77,6 +80,10 @@ void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& acti
     add_accel_build_options(*command, options->accel_options);
     command->add_option("-o,--output", options->hits_path, "hit file (default: standard output)")
         ->type_name("HITS");
+    command
+        ->add_option("--time", options->time,
+                     "pose the scene at T seconds of its glTF animation (animation 0) first")
+        ->type_name("T");
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_trace(*options); }; });
 }

@@ -1,0 +1,288 @@
+#include "embree_glue/embree_dynamic_scene.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "rebraid/build_timer.h"
+#include "rebraid/error.h"
+
+namespace rebraid::glue {
+
+namespace {
+
+RTCBuildQuality to_embree(EmbreeBuildQuality quality) {
+    switch (quality) {
+        case EmbreeBuildQuality::low:
+            return RTC_BUILD_QUALITY_LOW;
+        case EmbreeBuildQuality::high:
+            return RTC_BUILD_QUALITY_HIGH;
+        case EmbreeBuildQuality::medium:
+            break;
+    }
+    return RTC_BUILD_QUALITY_MEDIUM;
+}
+
+void configure_scene(EmbreeDevice& device, RTCScene scene, const EmbreeReferenceSettings& settings,
+                     bool is_dynamic) {
+    int flags = settings.is_robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE;
+    if (is_dynamic) flags |= RTC_SCENE_FLAG_DYNAMIC;
+    rtcSetSceneFlags(scene, static_cast<RTCSceneFlags>(flags));
+    device.throw_if_error("rtcSetSceneFlags");
+    rtcSetSceneBuildQuality(scene, to_embree(settings.build_quality));
+    device.throw_if_error("rtcSetSceneBuildQuality");
+}
+
+void commit_scene(EmbreeDevice& device, RTCScene scene, const char* what) {
+    rtcCommitScene(scene);
+    device.throw_if_error(what);
+}
+
+/// Writes `mesh`'s positions, mapped by `to_world` (object space when null), into the
+/// geometry's vertex buffer.
+void write_vertices(RTCGeometry geometry, const Mesh& mesh, const AffineTransform* to_world) {
+    auto* vertices =
+        static_cast<Vec3f*>(rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0));
+    if (to_world != nullptr) {
+        std::transform(mesh.positions.begin(), mesh.positions.end(), vertices,
+                       [&](Vec3f p) { return to_world->transform_point(p); });
+    } else {
+        std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
+    }
+}
+
+/// A new triangle geometry holding `mesh` (mapped by `to_world` when not null), committed and
+/// attached to `scene` as `geom_id`. Returns the geometry, borrowed from the scene.
+RTCGeometry attach_mesh(EmbreeDevice& device, RTCScene scene, const Mesh& mesh,
+                        const AffineTransform* to_world, unsigned int geom_id,
+                        RTCBuildQuality quality) {
+    RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    device.throw_if_error("rtcNewGeometry(triangles)");
+    if (geometry == nullptr) throw Error("rtcNewGeometry: Embree returned no geometry");
+    // Embree's own buffers are padded for its 16-byte vertex loads.
+    void* vertices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                             sizeof(Vec3f), mesh.positions.size());
+    auto* indices = static_cast<Triangle*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                sizeof(Triangle), mesh.triangles.size()));
+    device.throw_if_error("rtcSetNewGeometryBuffer");
+    if (vertices == nullptr || indices == nullptr) {
+        rtcReleaseGeometry(geometry);
+        throw Error("rtcSetNewGeometryBuffer: Embree returned no buffer");
+    }
+    write_vertices(geometry, mesh, to_world);
+    std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
+    rtcSetGeometryBuildQuality(geometry, quality);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometryByID(scene, geometry, geom_id);
+    rtcReleaseGeometry(geometry);  // the scene holds its own reference
+    device.throw_if_error("rtcAttachGeometryByID(triangles)");
+    return geometry;
+}
+
+RTCRay to_rtc_ray(const Ray& ray) {
+    RTCRay out{};
+    out.org_x = ray.org.x;
+    out.org_y = ray.org.y;
+    out.org_z = ray.org.z;
+    out.tnear = ray.tnear;
+    out.dir_x = ray.dir.x;
+    out.dir_y = ray.dir.y;
+    out.dir_z = ray.dir.z;
+    out.tfar = ray.tfar;
+    out.mask = std::numeric_limits<unsigned int>::max();
+    return out;
+}
+
+/// False for a ray Embree must not see: an empty segment is a miss; what Debian's Embree
+/// would assert on (negative tnear, non-finite origin or direction) throws.
+bool is_traceable(const Ray& ray) {
+    if (!(ray.tnear <= ray.tfar)) return false;
+    if (ray.tnear < 0.0f || !is_finite(ray.org) || !is_finite(ray.dir))
+        throw Error(
+            "EmbreeDynamicAccel: ray with negative tnear or non-finite origin or "
+            "direction");
+    return true;
+}
+
+}  // namespace
+
+std::string_view embree_dynamic_mode_name(EmbreeDynamicMode mode) {
+    switch (mode) {
+        case EmbreeDynamicMode::flat:
+            return "embree-flat";
+        case EmbreeDynamicMode::flat_refit:
+            return "embree-flat-refit";
+        case EmbreeDynamicMode::instanced:
+            break;
+    }
+    return "embree-instanced";
+}
+
+EmbreeDynamicAccel::EmbreeDynamicAccel(const DynamicScene& scene, EmbreeDynamicMode mode,
+                                       const EmbreeReferenceSettings& settings)
+    : scene_(scene),
+      mode_(mode),
+      settings_(settings),
+      device_(settings.device_config),
+      top_scene_(device_) {
+    const Scene& world = scene.scene();
+    stats_.triangles = world.instanced_triangle_count();
+    stats_.instances = world.instances.size();
+    stats_.meshes = world.meshes.size();
+    const BuildTimer timer;
+    try {
+        if (mode == EmbreeDynamicMode::instanced)
+            build_instanced();
+        else
+            build_flat();
+    } catch (const Error& error) {
+        throw Error("EmbreeDynamicAccel (" + std::string(embree_dynamic_mode_name(mode)) +
+                    "): " + error.what());
+    }
+    stats_.build_ms = timer.elapsed_ms();
+    stats_.memory_bytes =
+        static_cast<std::uint64_t>(std::max<std::int64_t>(device_.allocated_bytes(), 0));
+}
+
+void EmbreeDynamicAccel::build_flat() {
+    const Scene& world = scene_.scene();
+    const bool refits = mode_ == EmbreeDynamicMode::flat_refit;
+    configure_scene(device_, top_scene_.get(), settings_, refits);
+    std::vector<char> is_changing(world.instances.size(), 0);
+    for (InstanceId id : scene_.changing_instances()) is_changing[id] = 1;
+    geometries_.assign(world.instances.size(), nullptr);
+    for (std::size_t i = 0; i < world.instances.size(); ++i) {
+        const Instance& instance = world.instances[i];
+        const Mesh& mesh = world.meshes[instance.mesh_id];
+        if (mesh.triangles.empty()) continue;
+        const RTCBuildQuality quality =
+            refits && is_changing[i] ? RTC_BUILD_QUALITY_REFIT : to_embree(settings_.build_quality);
+        geometries_[i] = attach_mesh(device_, top_scene_.get(), mesh, &instance.object_to_world,
+                                     static_cast<unsigned int>(i), quality);
+    }
+    commit_scene(device_, top_scene_.get(), "rtcCommitScene");
+}
+
+void EmbreeDynamicAccel::build_instanced() {
+    const Scene& world = scene_.scene();
+    geometries_.assign(world.meshes.size(), nullptr);
+    mesh_scenes_.reserve(world.meshes.size());
+    for (std::size_t m = 0; m < world.meshes.size(); ++m) {
+        const bool is_dynamic = scene_.is_dynamic_mesh(MeshId(m));
+        EmbreeSceneHandle& mesh_scene = mesh_scenes_.emplace_back(device_);
+        configure_scene(device_, mesh_scene.get(), settings_, is_dynamic);
+        if (!world.meshes[m].triangles.empty())
+            geometries_[m] = attach_mesh(
+                device_, mesh_scene.get(), world.meshes[m], nullptr, 0,
+                is_dynamic ? RTC_BUILD_QUALITY_REFIT : to_embree(settings_.build_quality));
+        commit_scene(device_, mesh_scene.get(), "rtcCommitScene(mesh)");
+    }
+    configure_scene(device_, top_scene_.get(), settings_, true);
+    instance_geometries_.assign(world.instances.size(), nullptr);
+    for (std::size_t i = 0; i < world.instances.size(); ++i) {
+        const Instance& instance = world.instances[i];
+        RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+        device_.throw_if_error("rtcNewGeometry(instance)");
+        rtcSetGeometryInstancedScene(geometry, mesh_scenes_[instance.mesh_id].get());
+        rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                                &instance.object_to_world);
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometryByID(top_scene_.get(), geometry, static_cast<unsigned int>(i));
+        rtcReleaseGeometry(geometry);
+        device_.throw_if_error("rtcAttachGeometryByID(instance)");
+        instance_geometries_[i] = geometry;
+    }
+    commit_scene(device_, top_scene_.get(), "rtcCommitScene(top)");
+}
+
+EmbreeFrameTimes EmbreeDynamicAccel::update() {
+    EmbreeFrameTimes times;
+    const Scene& world = scene_.scene();
+    BuildTimer update_timer;
+    if (mode_ == EmbreeDynamicMode::instanced) {
+        const std::vector<MeshId>& dynamic = scene_.dynamic_meshes();
+        // Meshes are independent: their buffers are rewritten and their scenes rebuilt in
+        // parallel, as a renderer would.
+        tbb::parallel_for(std::size_t(0), dynamic.size(), std::size_t(1), [&](std::size_t i) {
+            const MeshId mesh_id = dynamic[i];
+            RTCGeometry geometry = geometries_[mesh_id];
+            if (geometry == nullptr) return;
+            write_vertices(geometry, world.meshes[mesh_id], nullptr);
+            rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+            rtcCommitGeometry(geometry);
+            rtcCommitScene(mesh_scenes_[mesh_id].get());
+        });
+        device_.throw_if_error("rtcCommitScene(dynamic mesh)");
+        for (InstanceId id : scene_.moving_instances()) {
+            RTCGeometry geometry = instance_geometries_[id];
+            rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                                    &world.instances[id].object_to_world);
+            rtcCommitGeometry(geometry);
+        }
+        // Instances of rebuilt mesh scenes must be committed again for the top to see them.
+        for (InstanceId id : scene_.changing_instances())
+            rtcCommitGeometry(instance_geometries_[id]);
+        device_.throw_if_error("rtcCommitGeometry(instance)");
+    } else {
+        const std::vector<InstanceId>& changing = scene_.changing_instances();
+        tbb::parallel_for(std::size_t(0), changing.size(), std::size_t(1), [&](std::size_t i) {
+            const InstanceId id = changing[i];
+            RTCGeometry geometry = geometries_[id];
+            if (geometry == nullptr) return;
+            const Instance& instance = world.instances[id];
+            write_vertices(geometry, world.meshes[instance.mesh_id], &instance.object_to_world);
+        });
+        for (InstanceId id : changing) {
+            if (geometries_[id] == nullptr) continue;
+            rtcUpdateGeometryBuffer(geometries_[id], RTC_BUFFER_TYPE_VERTEX, 0);
+            rtcCommitGeometry(geometries_[id]);
+        }
+        device_.throw_if_error("rtcCommitGeometry");
+    }
+    times.update_ms = update_timer.elapsed_ms();
+    const BuildTimer top_timer;
+    commit_scene(device_, top_scene_.get(), "rtcCommitScene");
+    times.top_ms = top_timer.elapsed_ms();
+    return times;
+}
+
+Hit EmbreeDynamicAccel::intersect_counted(const Ray& ray, TraversalCounters* /*counters*/) const {
+    if (!is_traceable(ray)) return Hit{};
+    RTCRayHit rayhit{};
+    rayhit.ray = to_rtc_ray(ray);
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(top_scene_.get(), &context, &rayhit);
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
+    Hit hit;
+    hit.t = rayhit.ray.tfar;
+    hit.instance_id =
+        mode_ == EmbreeDynamicMode::instanced ? rayhit.hit.instID[0] : rayhit.hit.geomID;
+    hit.prim_id = rayhit.hit.primID;
+    hit.u = rayhit.hit.u;
+    hit.v = rayhit.hit.v;
+    return hit;
+}
+
+bool EmbreeDynamicAccel::occluded(const Ray& ray) const {
+    if (!is_traceable(ray)) return false;
+    RTCRay rtc_ray = to_rtc_ray(ray);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcOccluded1(top_scene_.get(), &context, &rtc_ray);
+    return rtc_ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+AccelStats EmbreeDynamicAccel::stats() const {
+    return stats_;
+}
+
+}  // namespace rebraid::glue

@@ -1,0 +1,104 @@
+#include "rebraid/dynamic_scene_accel.h"
+
+#include <tbb/parallel_for.h>
+
+#include <string>
+#include <utility>
+
+#include "rebraid/build_timer.h"
+#include "rebraid/bvh_stats.h"
+#include "rebraid/error.h"
+#include "rebraid/rebraid_builder.h"
+
+namespace rebraid {
+
+std::string_view dynamic_top_name(DynamicTop top) {
+    return top == DynamicTop::two_level ? "twolevel" : "rebraid";
+}
+
+DynamicTop parse_dynamic_top(std::string_view name) {
+    if (name == "twolevel") return DynamicTop::two_level;
+    if (name == "rebraid") return DynamicTop::rebraid;
+    throw Error("parse_dynamic_top: unknown top level '" + std::string(name) +
+                "' (valid: twolevel, rebraid)");
+}
+
+DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
+                                     const DynamicSceneAccelSettings& settings)
+    : scene_(scene), settings_(settings) {
+    settings_.update.validate();
+    settings_.static_build.validate();
+    settings_.two_level_top.validate();
+    settings_.rebraid.validate();
+    const BuildTimer timer;
+    const Scene& world = scene.scene();
+    updaters_.reserve(scene.dynamic_meshes().size());
+    for (std::size_t i = 0; i < scene.dynamic_meshes().size(); ++i)
+        updaters_.emplace_back(settings_.update);
+    last_updates_.assign(updaters_.size(), {});
+
+    // Dynamic meshes start from the tree their updater rebuilds to (one primitive per leaf
+    // when it rotates), so the first frame compares like with like.
+    const BuildSettings dynamic_build =
+        updaters_.empty() ? settings_.static_build : updaters_.front().rebuild_settings();
+    std::vector<ObjectBvh> object_bvhs(world.meshes.size());
+    tbb::parallel_for(std::size_t(0), world.meshes.size(), std::size_t(1), [&](std::size_t i) {
+        object_bvhs[i] = build_object_bvh(world.meshes[i], scene.is_dynamic_mesh(MeshId(i))
+                                                               ? dynamic_build
+                                                               : settings_.static_build);
+    });
+    assemble(std::move(object_bvhs));
+    build_ms_ = timer.elapsed_ms();
+}
+
+void DynamicSceneAccel::assemble(std::vector<ObjectBvh> object_bvhs) {
+    const Scene& world = scene_.scene();
+    const BuildTimer timer;
+    AccelStats info;
+    TopLevelBvh top;
+    if (settings_.top == DynamicTop::rebraid) {
+        RebraidBuild build = build_rebraid(world, object_bvhs, settings_.rebraid);
+        top = std::move(build.top);
+        info.brefs = build.brefs;
+        info.budget = build.budget;
+        info.opened = build.opened;
+    } else {
+        top = build_two_level(world, object_bvhs, settings_.two_level_top);
+    }
+    info.top_build_ms = timer.elapsed_ms();
+    accel_.reset();  // its object BVHs were moved out already
+    accel_.emplace(world, std::move(object_bvhs), std::move(top), info);
+}
+
+DynamicFrameReport DynamicSceneAccel::update() {
+    DynamicFrameReport report;
+    const Scene& world = scene_.scene();
+    std::vector<ObjectBvh> object_bvhs = std::move(*accel_).release_object_bvhs();
+    {
+        const BuildTimer timer;
+        const std::vector<MeshId>& dynamic = scene_.dynamic_meshes();
+        // Each updater owns its mesh's tree: the meshes are independent, so the order in
+        // which they finish does not matter.
+        tbb::parallel_for(std::size_t(0), dynamic.size(), std::size_t(1), [&](std::size_t i) {
+            last_updates_[i] =
+                updaters_[i].update(world.meshes[dynamic[i]], object_bvhs[dynamic[i]]);
+        });
+        report.update_ms = timer.elapsed_ms();
+    }
+    {
+        const BuildTimer timer;
+        assemble(std::move(object_bvhs));
+        report.top_ms = timer.elapsed_ms();
+    }
+    report.sah =
+        top_level_sah(accel_->top_level(), accel_->object_bvhs(), accel_->instance_meshes(), [&] {
+            std::vector<AffineTransform> transforms;
+            transforms.reserve(world.instances.size());
+            for (const Instance& instance : world.instances)
+                transforms.push_back(instance.object_to_world);
+            return transforms;
+        }());
+    return report;
+}
+
+}  // namespace rebraid

@@ -1,0 +1,80 @@
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "rebraid/build_settings.h"
+#include "rebraid/dynamic_scene.h"
+#include "rebraid/instanced_accel.h"
+#include "rebraid/object_bvh_update.h"
+#include "rebraid/rebraid_settings.h"
+#include "rebraid/two_level_builder.h"
+
+namespace rebraid {
+
+/// Which top level a DynamicSceneAccel rebuilds every frame.
+enum class DynamicTop {
+    two_level,  ///< "twolevel": one top-level leaf per instance (two_level_builder.h)
+    rebraid,    ///< "rebraid": the re-braided top (rebraid_builder.h)
+};
+
+/// The command-line name: "twolevel" or "rebraid".
+std::string_view dynamic_top_name(DynamicTop top);
+/// Inverse of dynamic_top_name(); throws rebraid::Error listing the valid names.
+DynamicTop parse_dynamic_top(std::string_view name);
+
+/// Parameters of DynamicSceneAccel.
+struct DynamicSceneAccelSettings {
+    DynamicTop top = DynamicTop::rebraid;
+    /// How the BVHs of deforming meshes follow them (one updater per dynamic mesh).
+    ObjectBvhUpdateSettings update;
+    /// Builder of the static meshes' BVHs (built once).
+    BuildSettings static_build;
+    /// The plain top (top = two_level).
+    BuildSettings two_level_top = default_top_level_settings();
+    /// The re-braided top (top = rebraid).
+    RebraidSettings rebraid;
+};
+
+/// What one frame's update cost and gave.
+struct DynamicFrameReport {
+    double update_ms = 0.0;  ///< all dynamic object BVHs brought up to date
+    double top_ms = 0.0;     ///< the top level rebuilt and the structure assembled
+    double sah = 0.0;        ///< SAH of the whole structure (README "SAH")
+};
+
+/// A two-level structure over a DynamicScene that follows its animation: static object BVHs
+/// built once, dynamic ones updated by an ObjectBvhUpdater each, the top level rebuilt from
+/// scratch every frame over the same object BVHs (paper §6: the top is cheap to rebuild, so
+/// re-braiding every frame is affordable).
+class DynamicSceneAccel {
+public:
+    /// Builds every object BVH and the first top level. The dynamic scene must outlive this.
+    /// Throws rebraid::Error for invalid settings.
+    DynamicSceneAccel(const DynamicScene& scene, const DynamicSceneAccelSettings& settings);
+
+    /// Follows the scene to its current pose (call after DynamicScene::pose()).
+    DynamicFrameReport update();
+
+    /// The structure at the current pose; replaced by update().
+    const InstancedAccel& accel() const { return *accel_; }
+    /// Wall time of the construction: object BVHs plus the first top.
+    double build_ms() const { return build_ms_; }
+    /// Reports of the dynamic meshes' last updates (index as DynamicScene::dynamic_meshes()).
+    const std::vector<ObjectBvhUpdateReport>& last_updates() const { return last_updates_; }
+
+private:
+    /// Builds the top level over `object_bvhs` and assembles the structure.
+    void assemble(std::vector<ObjectBvh> object_bvhs);
+
+    const DynamicScene& scene_;
+    DynamicSceneAccelSettings settings_;
+    std::vector<ObjectBvhUpdater> updaters_;  ///< index as dynamic_meshes()
+    std::vector<ObjectBvhUpdateReport> last_updates_;
+    std::optional<InstancedAccel> accel_;
+    double build_ms_ = 0.0;
+};
+
+}  // namespace rebraid
