@@ -31,7 +31,9 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // CLI11 prints the message; every error exits with 1, as the README promises
+        // (CLI11's own codes would be 105, 106, ...). --help and --version are not errors.
+        return app.exit(e) == 0 ? 0 : 1;
     }
 
     try {
