@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -164,6 +165,11 @@ struct StrategyCase {
     std::string name;
     ObjectBvhUpdateSettings settings;
 };
+
+/// How GoogleTest shows a case (in ctest's listing too): its name, not its bytes.
+void PrintTo(const StrategyCase& strategy_case, std::ostream* out) {
+    *out << strategy_case.name;
+}
 
 std::vector<StrategyCase> strategy_cases() {
     std::vector<StrategyCase> cases;
