@@ -160,6 +160,13 @@ void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
 
 RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                            const RebraidSettings& settings) {
+    std::vector<InstanceId> every_instance(scene.instances.size());
+    for (std::size_t i = 0; i < every_instance.size(); ++i) every_instance[i] = InstanceId(i);
+    return build_rebraid(scene, object_bvhs, settings, every_instance);
+}
+
+RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                           const RebraidSettings& settings, std::span<const InstanceId> instances) {
     settings.validate();
     const BuildTimer timer;
     if (object_bvhs.size() != scene.meshes.size())
@@ -167,10 +174,15 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
                     std::to_string(scene.meshes.size()) + " meshes");
     std::vector<std::uint32_t> instance_mesh(scene.instances.size());
     std::vector<AffineTransform> object_to_world(scene.instances.size());
-    std::uint64_t seed_count = 0, primitive_count = 0;
     for (std::size_t i = 0; i < scene.instances.size(); ++i) {
         instance_mesh[i] = scene.instances[i].mesh_id;
         object_to_world[i] = scene.instances[i].object_to_world;
+    }
+    std::uint64_t seed_count = 0, primitive_count = 0;
+    for (const InstanceId i : instances) {
+        if (i >= scene.instances.size())
+            throw Error("build_rebraid: instance " + std::to_string(i) + " of a scene with " +
+                        std::to_string(scene.instances.size()) + " instances");
         const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
         if (bvh.root.is_empty()) continue;
         ++seed_count;
@@ -189,13 +201,13 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
     std::vector<BuildPrim> prims(capacity);
     std::vector<BRefTarget> targets(capacity);
     std::uint32_t n = 0;
-    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+    for (const InstanceId i : instances) {
         const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
         if (bvh.root.is_empty()) continue;
         // One BRef per instance at its object root, with the root's primitive count (§3.2).
-        prims[n] = {bref_world_bounds(bvh, bvh.root, bvh.bounds, object_to_world[i],
-                                      settings.bounds_rule),
-                    n, bvh.prim_count()};
+        prims[n] = {
+            bref_world_bounds(bvh, bvh.root, bvh.bounds, object_to_world[i], settings.bounds_rule),
+            n, bvh.prim_count()};
         targets[n] = {InstanceId(i), bvh.root};
         ++n;
     }

@@ -29,9 +29,15 @@ struct RebraidBuild {
 RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                            const RebraidSettings& settings = {});
 
+/// The same over a subset of the scene's instances, given by id in the order their BRefs
+/// start in (the items keep the scene's instance ids). The budget counts only these
+/// instances. Throws rebraid::Error for an id past the scene's instances.
+RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                           const RebraidSettings& settings, std::span<const InstanceId> instances);
+
 /// Object BVHs from `object_builder`, then the re-braided top.
-InstancedAccel build_rebraid_accel(const Scene& scene,
-                                   const ObjectBvhBuilder& object_builder = own_object_bvh_builder(),
-                                   const RebraidSettings& settings = {});
+InstancedAccel build_rebraid_accel(
+    const Scene& scene, const ObjectBvhBuilder& object_builder = own_object_bvh_builder(),
+    const RebraidSettings& settings = {});
 
 }  // namespace rebraid

@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
+#include <algorithm>
 
 #include "embree_glue/embree_reference.h"
 #include "hit_comparison.h"
@@ -32,11 +32,12 @@ std::vector<NamedSettings> settings_variants() {
         {"no-budget", {.budget_factor = 0.0f}},
         {"open-everything", {.open_threshold = 0.0f, .budget_factor = 1000.0f}},
         {"threshold-0.5", {.open_threshold = 0.5f, .budget_factor = 2.0f}},
-        {"per-primitive", {.budget_rule = BudgetRule::per_primitive,
-                           .primitives_per_bref = 100.0f}},
-        {"children-bounds", {.open_threshold = 0.05f,
-                             .budget_factor = 8.0f,
-                             .bounds_rule = BRefBoundsRule::transformed_children}},
+        {"per-primitive",
+         {.budget_rule = BudgetRule::per_primitive, .primitives_per_bref = 100.0f}},
+        {"children-bounds",
+         {.open_threshold = 0.05f,
+          .budget_factor = 8.0f,
+          .bounds_rule = BRefBoundsRule::transformed_children}},
     };
 }
 
@@ -51,7 +52,8 @@ TEST(RebraidBuilder, MatchesEmbreeFlatAtSeveralSettings) {
         const glue::EmbreeFlatAccel reference(named.scene);
         const std::vector<Ray> rays = generate_random_rays(named.scene.bounds(), 10000, 7);
         const test::AccelAnswers expected = test::trace_all(reference, rays);
-        const std::vector<ObjectBvh> bvhs = build_object_bvhs(named.scene, own_object_bvh_builder());
+        const std::vector<ObjectBvh> bvhs =
+            build_object_bvhs(named.scene, own_object_bvh_builder());
         for (const NamedSettings& variant : settings_variants()) {
             SCOPED_TRACE(named.name + " / " + variant.name);
             RebraidBuild build = build_rebraid(named.scene, bvhs, variant.settings);
@@ -64,7 +66,8 @@ TEST(RebraidBuilder, MatchesEmbreeFlatAtSeveralSettings) {
 
 TEST(RebraidBuilder, EveryTriangleReachableOnceAndBudgetKept) {
     for (const test::NamedScene& named : rebraid_scenes()) {
-        const std::vector<ObjectBvh> bvhs = build_object_bvhs(named.scene, own_object_bvh_builder());
+        const std::vector<ObjectBvh> bvhs =
+            build_object_bvhs(named.scene, own_object_bvh_builder());
         for (const NamedSettings& variant : settings_variants()) {
             SCOPED_TRACE(named.name + " / " + variant.name);
             RebraidBuild build = build_rebraid(named.scene, bvhs, variant.settings);
@@ -133,6 +136,28 @@ TEST(RebraidBuilder, SingleLeafObjectsAndEmptyMeshes) {
     EXPECT_FLOAT_EQ(hit.t, 1.0f);
 }
 
+TEST(RebraidBuilder, InstanceSubsetReachesExactlyItsInstances) {
+    const Scene scene = test::make_overlap_scene(200, 3);
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    std::vector<InstanceId> odd;
+    for (InstanceId i = 1; i < scene.instances.size(); i += 2) odd.push_back(i);
+    RebraidBuild build = build_rebraid(scene, bvhs, {}, odd);
+    EXPECT_EQ(build.budget, 4u * odd.size());
+    EXPECT_GT(build.opened, 0u);
+    const InstancedAccel accel(scene, bvhs, std::move(build.top), {});
+    const test::ReachCounts counts = test::reach_counts(scene, accel);
+    for (std::size_t i = 0; i < counts.size(); ++i)
+        for (const int count : counts[i]) ASSERT_EQ(count, int(i % 2)) << "instance " << i;
+    // A subset of every instance in scene order is the ordinary build.
+    std::vector<InstanceId> all(scene.instances.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = InstanceId(i);
+    const InstancedAccel from_subset(scene, bvhs, build_rebraid(scene, bvhs, {}, all).top, {});
+    const InstancedAccel ordinary(scene, bvhs, build_rebraid(scene, bvhs, {}).top, {});
+    EXPECT_EQ(from_subset.stats().structure_hash, ordinary.stats().structure_hash);
+    const InstanceId past_end[] = {InstanceId(scene.instances.size())};
+    EXPECT_THROW(build_rebraid(scene, bvhs, {}, past_end), Error);
+}
+
 TEST(RebraidBuilder, EmptySceneHasNoItems) {
     const Scene scene;
     const RebraidBuild build = build_rebraid(scene, {}, {});
@@ -146,7 +171,8 @@ std::uint64_t rebraid_hash(const Scene& scene, const RebraidSettings& settings, 
     std::uint64_t hash = 0;
     tbb::task_arena arena(threads);
     arena.execute([&] {
-        const InstancedAccel accel = build_rebraid_accel(scene, own_object_bvh_builder({.parallel_threshold = 256}), settings);
+        const InstancedAccel accel = build_rebraid_accel(
+            scene, own_object_bvh_builder({.parallel_threshold = 256}), settings);
         hash = *accel.stats().structure_hash;
     });
     return hash;
