@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
 #include "gltf_test_files.h"
 #include "rebraid/mesh_generators.h"
 
@@ -22,50 +23,14 @@ using rebraid::Mesh;
 using rebraid::test::GltfTestFile;
 
 namespace fs = std::filesystem;
-
-struct CommandResult {
-    int exit_code = -1;
-    std::string out, err;
-};
-
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-std::string shell_quote(const std::string& text) {
-    std::string quoted = "'";
-    for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
+namespace test = rebraid::test;
+using test::CommandResult;
 
 /// A scratch folder of this test alone (ctest runs tests in parallel processes).
 fs::path scratch_dir(const std::string& test_name) {
     const fs::path dir = fs::path(REBRAID_TEST_TMP) / ("animate_" + test_name);
     fs::create_directories(dir);
     return dir;
-}
-
-CommandResult run_rebraid(const fs::path& dir, std::initializer_list<std::string> arguments) {
-    std::string command = shell_quote(REBRAID_CLI);
-    for (const std::string& argument : arguments) {
-        command += ' ';
-        command += shell_quote(argument);
-    }
-    const fs::path out_path = dir / "stdout.txt", err_path = dir / "stderr.txt";
-    // Appended piecewise: GCC 12 warns (falsely, -Wrestrict) on "literal" + std::string&&.
-    command += " >";
-    command += shell_quote(out_path.string());
-    command += " 2>";
-    command += shell_quote(err_path.string());
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    result.out = read_file(out_path);
-    result.err = read_file(err_path);
-    return result;
 }
 
 std::vector<std::string> split(const std::string& text, char separator) {
@@ -100,7 +65,7 @@ std::string small_static_scene_file(const std::string& test_name) {
 
 TEST(AnimateCommand, JsonHasOneObjectPerMethodWithTheSummaryKeys) {
     const fs::path dir = scratch_dir("json");
-    const CommandResult result = run_rebraid(
+    const CommandResult result = test::run_rebraid_in(
         dir, {"animate", "--static", small_static_scene_file("json"), "--frames", "2", "--copies",
               "2", "--width", "32", "--height", "18", "--update", "refit,rotate", "--json"});
     ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -130,13 +95,13 @@ TEST(AnimateCommand, JsonHasOneObjectPerMethodWithTheSummaryKeys) {
 TEST(AnimateCommand, CsvHasOneRowPerFrameAndMethod) {
     const fs::path dir = scratch_dir("csv");
     const fs::path csv = dir / "frames.csv";
-    const CommandResult result =
-        run_rebraid(dir, {"animate", "--static", small_static_scene_file("csv"), "--frames", "3",
-                          "--copies", "1", "--width", "16", "--height", "9", "--top", "rebraid",
-                          "--update", "auto", "--no-embree", "--csv", csv.string()});
+    const CommandResult result = test::run_rebraid_in(
+        dir, {"animate", "--static", small_static_scene_file("csv"), "--frames", "3", "--copies",
+              "1", "--width", "16", "--height", "9", "--top", "rebraid", "--update", "auto",
+              "--no-embree", "--csv", csv.string()});
     ASSERT_EQ(result.exit_code, 0) << result.err;
     EXPECT_NE(result.out.find("rebraid+auto"), std::string::npos) << result.out;
-    const std::vector<std::string> lines = split(read_file(csv), '\n');
+    const std::vector<std::string> lines = split(test::read_text_file(csv), '\n');
     ASSERT_EQ(lines.size(), 1u + 3u);
     const std::vector<std::string> header = split(lines[0], ',');
     const std::vector<std::string> expected_header = {"frame",        "time",      "method",
@@ -162,12 +127,12 @@ TEST(AnimateCommand, PlotWritesAPng) {
     const fs::path dir = scratch_dir("plot");
     const fs::path png = dir / "frames.png";
     fs::remove(png);
-    const CommandResult result =
-        run_rebraid(dir, {"animate", "--static", small_static_scene_file("plot"), "--frames", "2",
-                          "--copies", "1", "--width", "16", "--height", "9", "--update", "refit",
-                          "--top", "twolevel", "--plot", png.string()});
+    const CommandResult result = test::run_rebraid_in(
+        dir, {"animate", "--static", small_static_scene_file("plot"), "--frames", "2", "--copies",
+              "1", "--width", "16", "--height", "9", "--update", "refit", "--top", "twolevel",
+              "--plot", png.string()});
     ASSERT_EQ(result.exit_code, 0) << result.err;
-    const std::string bytes = read_file(png);
+    const std::string bytes = test::read_text_file(png);
     ASSERT_GE(bytes.size(), 8u);
     EXPECT_EQ(bytes.substr(1, 3), "PNG");
 }
@@ -183,25 +148,25 @@ TEST(AnimateCommand, BadOptionsExitWithOneAndAMessage) {
     };
     const std::string static_scene = small_static_scene_file("bad");
     for (const auto& [arguments, message] : cases) {
-        std::string command = shell_quote(REBRAID_CLI);
+        std::string command = test::shell_quote(REBRAID_CLI);
         command += " animate --frames 1 --width 8 --height 8";
         if (arguments.front() != "--static") {
             command += " --static ";
-            command += shell_quote(static_scene);
+            command += test::shell_quote(static_scene);
         }
         for (const std::string& argument : arguments) {
             command += ' ';
-            command += shell_quote(argument);
+            command += test::shell_quote(argument);
         }
         command += " >/dev/null 2>";
-        command += shell_quote((dir / "stderr.txt").string());
+        command += test::shell_quote((dir / "stderr.txt").string());
         const int status = std::system(command.c_str());
         ASSERT_TRUE(status != -1 && WIFEXITED(status)) << command;
         EXPECT_EQ(WEXITSTATUS(status), 1) << command;
-        EXPECT_NE(read_file(dir / "stderr.txt").find(message), std::string::npos)
-            << command << ": " << read_file(dir / "stderr.txt");
+        EXPECT_NE(test::read_text_file(dir / "stderr.txt").find(message), std::string::npos)
+            << command << ": " << test::read_text_file(dir / "stderr.txt");
     }
-    const CommandResult frames = run_rebraid(dir, {"animate", "--frames", "0"});
+    const CommandResult frames = test::run_rebraid_in(dir, {"animate", "--frames", "0"});
     EXPECT_NE(frames.exit_code, 0);
     EXPECT_FALSE(frames.err.empty());
 }

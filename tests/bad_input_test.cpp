@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
 #include "embree_glue/embree_reference.h"
 #include "gltf_test_files.h"
 #include "rebraid/error.h"
@@ -30,6 +31,16 @@ namespace rebraid {
 namespace {
 
 namespace fs = std::filesystem;
+using test::CommandResult;
+
+fs::path scratch_dir() {
+    return test::test_scratch_dir("bad_input_test");
+}
+
+/// Runs `rebraid` under a 120 s timeout: a hang fails instead of blocking the suite.
+CommandResult run_rebraid(const std::vector<std::string>& arguments) {
+    return test::run_rebraid_in(scratch_dir(), arguments, 120);
+}
 using test::GltfTestFile;
 using test::primitive;
 
@@ -37,60 +48,6 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 // ---- Running the command ------------------------------------------------------------------
-
-struct CommandResult {
-    int exit_code = -1;  ///< -1 when the process did not exit normally (a signal: a crash)
-    std::string out;
-    std::string err;
-};
-
-/// A folder of its own for the running test (ctest runs tests in parallel processes).
-fs::path scratch_dir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(REBRAID_TEST_TMP) / "bad_input_test" /
-                         (std::string(info->test_suite_name()) + "." + info->name());
-    fs::create_directories(dir);
-    return dir;
-}
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-void write_text(const fs::path& path, const std::string& text) {
-    std::ofstream(path, std::ios::binary) << text;
-}
-
-std::string shell_quote(const std::string& text) {
-    std::string quoted = "'";
-    for (char c : text) quoted += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
-/// Runs `rebraid` with `arguments` under a 120 s timeout (a hang fails instead of blocking
-/// the suite), capturing both output streams.
-CommandResult run_rebraid(const std::vector<std::string>& arguments) {
-    const fs::path dir = scratch_dir();
-    std::string command = "timeout 120 ";
-    command += shell_quote(REBRAID_CLI);
-    for (const std::string& argument : arguments) {
-        command += ' ';
-        command += shell_quote(argument);
-    }
-    command += " >";
-    command += shell_quote((dir / "stdout.txt").string());
-    command += " 2>";
-    command += shell_quote((dir / "stderr.txt").string());
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    result.out = read_text(dir / "stdout.txt");
-    result.err = read_text(dir / "stderr.txt");
-    return result;
-}
 
 /// The command fails cleanly: exit code 1 (not a crash, not the timeout's 124) and one
 /// `rebraid: ` message containing every phrase.
@@ -137,10 +94,10 @@ TEST(BadInputCli, BrokenGltfFilesExitWithOneAndNameTheProblem) {
     const fs::path dir = scratch_dir();
     // Cases the loader tests cover through the library; here the command must report them.
     const std::string whole =
-        read_text(scratch_glb(one_triangle_file(), "whole_for_truncation.glb"));
-    write_text(dir / "truncated.glb", whole.substr(0, whole.size() / 2));
+        test::read_text_file(scratch_glb(one_triangle_file(), "whole_for_truncation.glb"));
+    test::write_text_file(dir / "truncated.glb", whole.substr(0, whole.size() / 2));
     expect_clean_failure({"stats", (dir / "truncated.glb").string()}, {"truncated GLB"});
-    write_text(dir / "broken.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [");
+    test::write_text_file(dir / "broken.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [");
     expect_clean_failure({"stats", (dir / "broken.gltf").string()}, {"malformed glTF"});
 
     GltfTestFile past_buffer = one_triangle_file();
@@ -200,10 +157,11 @@ TEST(BadInputCli, MemoryBombsAreRejectedBeforeAllocating) {
     expect_clean_failure({"stats", scratch_glb(overflow, "overflow.glb")},
                          {"past the end of bufferView"});
     // The GLB header claims 4 GiB.
-    std::string whole = read_text(scratch_glb(one_triangle_file(), "whole_for_4gib_claim.glb"));
+    std::string whole =
+        test::read_text_file(scratch_glb(one_triangle_file(), "whole_for_4gib_claim.glb"));
     const std::uint32_t claimed = 0xffffffffu;
     whole.replace(8, 4, reinterpret_cast<const char*>(&claimed), 4);
-    write_text(scratch_dir() / "claims_4gib.glb", whole);
+    test::write_text_file(scratch_dir() / "claims_4gib.glb", whole);
     expect_clean_failure({"stats", (scratch_dir() / "claims_4gib.glb").string()},
                          {"truncated GLB"});
 }
@@ -213,11 +171,11 @@ TEST(BadInputCli, ExternalBufferThatIsMissingOrADeviceIsAnError) {
     GltfTestFile file = one_triangle_file();
     nlohmann::json json = file.json;
     json["buffers"] = {{{"byteLength", file.bin.size()}, {"uri", "no_such_file.bin"}}};
-    write_text(dir / "missing_bin.gltf", json.dump());
+    test::write_text_file(dir / "missing_bin.gltf", json.dump());
     expect_clean_failure({"stats", (dir / "missing_bin.gltf").string()}, {"malformed glTF"});
     // A uri naming an endless device must not hang or fill memory.
     json["buffers"] = {{{"byteLength", file.bin.size()}, {"uri", "/dev/zero"}}};
-    write_text(dir / "dev_zero.gltf", json.dump());
+    test::write_text_file(dir / "dev_zero.gltf", json.dump());
     expect_clean_failure({"stats", (dir / "dev_zero.gltf").string()}, {"malformed glTF"});
     // A directory given as the scene.
     expect_clean_failure({"stats", dir.string()}, {dir.string()});
@@ -228,7 +186,7 @@ TEST(BadInputCli, DeeplyNestedJsonDoesNotOverflowTheStack) {
     const std::size_t depth = 200000;
     std::string nested = "{\"asset\": {\"version\": \"2.0\"}, \"extras\": ";
     nested += std::string(depth, '[') + std::string(depth, ']') + "}";
-    write_text(dir / "nested.gltf", nested);
+    test::write_text_file(dir / "nested.gltf", nested);
     const CommandResult result = run_rebraid({"stats", (dir / "nested.gltf").string()});
     EXPECT_EQ(result.exit_code, 1) << result.err;  // no scene in it, whatever the parser does
 }
@@ -479,7 +437,7 @@ TEST(BadInputCli, BadRayFilesExitWithOneAndNameTheLine) {
     const std::string scene = tiny_scene();
     for (std::size_t i = 0; i < cases.size(); ++i) {
         const fs::path rays = dir / ("rays_" + std::to_string(i) + ".txt");
-        write_text(rays, "# a comment\n" + cases[i].text);
+        test::write_text_file(rays, "# a comment\n" + cases[i].text);
         expect_clean_failure({"trace", scene, rays.string()}, {rays.string(), cases[i].phrase});
     }
     expect_clean_failure({"trace", scene, (dir / "no_such_rays.txt").string()},
@@ -490,7 +448,7 @@ TEST(BadInputCli, ReversedSegmentIsAMissInTheHitFile) {
     const fs::path dir = scratch_dir();
     // The tiny scene's triangle (0,0,0) (1,0,0) (0,1,0): the first ray hits it at t = 10,
     // the same ray with tnear 30 > tfar 20 must miss.
-    write_text(dir / "rays.txt", "0.2 0.2 -10 0 0 1 0 inf\n0.2 0.2 -10 0 0 1 30 20\n");
+    test::write_text_file(dir / "rays.txt", "0.2 0.2 -10 0 0 1 0 inf\n0.2 0.2 -10 0 0 1 30 20\n");
     const std::string scene = tiny_scene();
     for (const char* accel : {"embree-flat", "rebraid"}) {
         const CommandResult result =

@@ -14,51 +14,16 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
+
 namespace {
 
 namespace fs = std::filesystem;
+namespace test = rebraid::test;
+using test::CommandResult;
 
-struct CommandResult {
-    int exit_code = -1;
-    std::string out;  ///< standard output
-    std::string err;  ///< standard error
-};
-
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-std::string shell_quote(const std::string& text) {
-    std::string quoted = "'";
-    for (char c : text) quoted += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
-/// Runs the rebraid binary with `arguments`, capturing both output streams in a folder of
-/// the running test's own (ctest may run tests in parallel).
 CommandResult run_rebraid(std::initializer_list<std::string> arguments) {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(REBRAID_TEST_TMP) / "cli_bench_test" /
-                         (std::string(info->test_suite_name()) + "." + info->name());
-    fs::create_directories(dir);
-    std::string command = shell_quote(REBRAID_CLI);
-    for (const std::string& argument : arguments) {
-        command += ' ';
-        command += shell_quote(argument);
-    }
-    command += " >";
-    command += shell_quote((dir / "stdout.txt").string());
-    command += " 2>";
-    command += shell_quote((dir / "stderr.txt").string());
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    result.out = read_file(dir / "stdout.txt");
-    result.err = read_file(dir / "stderr.txt");
-    return result;
+    return test::run_rebraid_in(test::test_scratch_dir("cli_bench_test"), arguments);
 }
 
 std::string shared_scene(const char* file) {

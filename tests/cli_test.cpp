@@ -15,68 +15,21 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
 #include "rebraid/default_scene.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+namespace test = rebraid::test;
+using test::CommandResult;
 
-struct CommandResult {
-    int exit_code = -1;
-    std::string out;  ///< standard output
-    std::string err;  ///< standard error
-};
-
-/// A folder of its own for the running test (ctest may run tests in parallel).
 fs::path scratch_dir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(REBRAID_TEST_TMP) / "cli_test" /
-                         (std::string(info->test_suite_name()) + "." + info->name());
-    fs::create_directories(dir);
-    return dir;
+    return test::test_scratch_dir("cli_test");
 }
 
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-void write_file(const fs::path& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-    ASSERT_TRUE(out.good()) << path;
-}
-
-/// Single-quotes `text` for the shell.
-std::string shell_quote(const std::string& text) {
-    std::string quoted = "'";
-    for (char c : text) quoted += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
-/// Runs the rebraid binary with `arguments`, capturing both output streams.
 CommandResult run_rebraid(std::initializer_list<std::string> arguments) {
-    const fs::path dir = scratch_dir();
-    const fs::path out_path = dir / "command_stdout.txt";
-    const fs::path err_path = dir / "command_stderr.txt";
-    std::string command = shell_quote(REBRAID_CLI);
-    // Appended piecewise: GCC 12 warns (falsely, -Wrestrict) on "literal" + std::string&&.
-    for (const std::string& argument : arguments) {
-        command += ' ';
-        command += shell_quote(argument);
-    }
-    command += " >";
-    command += shell_quote(out_path.string());
-    command += " 2>";
-    command += shell_quote(err_path.string());
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    result.out = read_file(out_path);
-    result.err = read_file(err_path);
-    return result;
+    return test::run_rebraid_in(scratch_dir(), arguments);
 }
 
 std::vector<std::string> split_lines(const std::string& text) {
@@ -148,7 +101,7 @@ fs::path write_two_quads_gltf(const fs::path& dir) {
            {"uri", "data:application/octet-stream;base64," + base64(buffer)}}}},
     };
     const fs::path path = dir / "two_quads.gltf";
-    write_file(path, gltf.dump(2));
+    test::write_text_file(path, gltf.dump(2));
     return path;
 }
 
@@ -174,15 +127,15 @@ TEST(CliTrace, WritesOneHitLinePerRayInInputOrder) {
     const fs::path dir = scratch_dir();
     const fs::path scene = write_two_quads_gltf(dir);
     const fs::path rays = dir / "rays.txt";
-    write_file(rays,
-               "# ox oy oz dx dy dz tnear tfar\n"
-               "0.75 0.25 5  0 0 -1  0 inf\n"  // below the diagonal: triangle 0, t = 5
-               "0.25 0.75 5  0 0 -2  0 inf\n"  // above it: triangle 1; t in units of dir
-               "\n"
-               "0.25 0.75 5  0 0 -1  0 4\n"    // tfar ends before the quad
-               "0.75 0.25 5  0 0 -1  6 inf\n"  // tnear skips instance 0, hits instance 1
-               "0.5 0.5 5  0 0 1  0 inf\n"     // pointing away
-               "3 3 5  0 0 -1  0 inf\n");      // beside the quads
+    test::write_text_file(rays,
+                          "# ox oy oz dx dy dz tnear tfar\n"
+                          "0.75 0.25 5  0 0 -1  0 inf\n"  // below the diagonal: triangle 0, t = 5
+                          "0.25 0.75 5  0 0 -2  0 inf\n"  // above it: triangle 1; t in units of dir
+                          "\n"
+                          "0.25 0.75 5  0 0 -1  0 4\n"    // tfar ends before the quad
+                          "0.75 0.25 5  0 0 -1  6 inf\n"  // tnear skips instance 0, hits instance 1
+                          "0.5 0.5 5  0 0 1  0 inf\n"     // pointing away
+                          "3 3 5  0 0 -1  0 inf\n");      // beside the quads
 
     const CommandResult result = run_rebraid({"trace", scene.string(), rays.string()});
     ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -211,7 +164,7 @@ TEST(CliTrace, WritesOneHitLinePerRayInInputOrder) {
         run_rebraid({"trace", scene.string(), rays.string(), "-o", hits.string()});
     ASSERT_EQ(to_file.exit_code, 0) << to_file.err;
     EXPECT_TRUE(to_file.out.empty());
-    EXPECT_EQ(read_file(hits), result.out);
+    EXPECT_EQ(test::read_text_file(hits), result.out);
 }
 
 TEST(CliTrace, EmbreeFlatAndInstancedAgreeOnRandomRaysInDefaultScene) {
@@ -356,9 +309,9 @@ TEST(CliRays, SameSeedGivesSameFileWithCountLines) {
             {"rays", scene.string(), "--count", "300", "--seed", seed, "-o", path.string()});
         ASSERT_EQ(result.exit_code, 0) << result.err;
     }
-    const std::string text = read_file(first);
-    EXPECT_EQ(text, read_file(second));
-    EXPECT_NE(text, read_file(other_seed));
+    const std::string text = test::read_text_file(first);
+    EXPECT_EQ(text, test::read_text_file(second));
+    EXPECT_NE(text, test::read_text_file(other_seed));
     const std::vector<std::string> lines = split_lines(text);
     ASSERT_EQ(lines.size(), 300u);
     for (const std::string& line : lines) EXPECT_EQ(split_fields(line).size(), 8u) << line;
@@ -391,7 +344,7 @@ TEST(CliErrors, BadRayLineNamesFileAndLine) {
     const fs::path dir = scratch_dir();
     const fs::path scene = write_two_quads_gltf(dir);
     const fs::path rays = dir / "bad_rays.txt";
-    write_file(rays, "0 0 5 0 0 -1 0 inf\n0 0 5 0 zero -1 0 inf\n");
+    test::write_text_file(rays, "0 0 5 0 0 -1 0 inf\n0 0 5 0 zero -1 0 inf\n");
     const CommandResult result = run_rebraid({"trace", scene.string(), rays.string()});
     EXPECT_EQ(result.exit_code, 1);
     EXPECT_EQ(result.err.rfind("rebraid: ", 0), 0u) << result.err;

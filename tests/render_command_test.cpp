@@ -11,57 +11,16 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
+
 namespace {
 
 namespace fs = std::filesystem;
+namespace test = rebraid::test;
+using test::CommandResult;
 
-struct CommandResult {
-    int exit_code = -1;
-    std::string out;
-    std::string err;
-};
-
-/// A folder of its own for the running test (ctest runs tests in parallel processes).
 fs::path scratch_dir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(REBRAID_TEST_TMP) / "render_command_test" /
-                         (std::string(info->test_suite_name()) + "." + info->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-std::string shell_quote(const std::string& text) {
-    std::string quoted = "'";
-    for (char c : text) quoted += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
-/// Runs the rebraid binary with `arguments` from `dir`, capturing both output streams there.
-CommandResult run_rebraid(const fs::path& dir, std::initializer_list<std::string> arguments) {
-    std::string command = shell_quote(REBRAID_CLI);
-    for (const std::string& argument : arguments) {
-        command += ' ';
-        command += shell_quote(argument);
-    }
-    const fs::path out_path = dir / "stdout.txt", err_path = dir / "stderr.txt";
-    command += " >";
-    command += shell_quote(out_path.string());
-    command += " 2>";
-    command += shell_quote(err_path.string());
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    result.out = read_text(out_path);
-    result.err = read_text(err_path);
-    return result;
+    return test::test_scratch_dir("render_command_test", true);
 }
 
 struct ImageFile {
@@ -102,8 +61,8 @@ TEST(RenderCommand, PngAndExrHaveRequestedSizeAndFormat) {
     const fs::path png = dir / "image.png", exr = dir / "image.exr";
     for (const fs::path& path : {png, exr}) {
         const CommandResult result =
-            run_rebraid(dir, {"render", "--mode", "path", "--spp", "1", "--width", "40", "--height",
-                              "30", "-o", path.string()});
+            test::run_rebraid_in(dir, {"render", "--mode", "path", "--spp", "1", "--width", "40",
+                                       "--height", "30", "-o", path.string()});
         ASSERT_EQ(result.exit_code, 0) << result.err;
     }
     const ImageFile png_file = open_image(png);
@@ -134,8 +93,8 @@ TEST(RenderCommand, CompareWritesHeatmapsSideBySideWithTotals) {
     const fs::path dir = scratch_dir();
     const fs::path image = dir / "compare.png";
     const CommandResult result =
-        run_rebraid(dir, {"render", "--compare", "twolevel,rebraid", "--width", "48", "--height",
-                          "32", "-o", image.string()});
+        test::run_rebraid_in(dir, {"render", "--compare", "twolevel,rebraid", "--width", "48",
+                                   "--height", "32", "-o", image.string()});
     ASSERT_EQ(result.exit_code, 0) << result.err;
     const ImageFile file = open_image(image);
     EXPECT_EQ(file.format, "png");
@@ -151,9 +110,9 @@ TEST(RenderCommand, CompareWritesHeatmapsSideBySideWithTotals) {
 TEST(RenderCommand, FramesAreNumberedPngsOfRequestedSize) {
     const fs::path dir = scratch_dir();
     const CommandResult result =
-        run_rebraid(dir, {"render", shared_scene("motion_capture_rom.glb"), "--mode", "normals",
-                          "--frames", "3", "--time-step", "0.5", "--width", "32", "--height", "24",
-                          "-o", (dir / "anim.png").string()});
+        test::run_rebraid_in(dir, {"render", shared_scene("motion_capture_rom.glb"), "--mode",
+                                   "normals", "--frames", "3", "--time-step", "0.5", "--width",
+                                   "32", "--height", "24", "-o", (dir / "anim.png").string()});
     ASSERT_EQ(result.exit_code, 0) << result.err;
     std::vector<ImageFile> frames;
     for (const char* name : {"anim_0000.png", "anim_0001.png", "anim_0002.png"}) {
