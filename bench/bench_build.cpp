@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "embree_glue/embree_device.h"
@@ -170,30 +171,22 @@ void embree_scene_build(benchmark::State& state, const std::string& scene) {
 }
 
 void register_benchmarks() {
-    for (const char* scene : {"default", "cg57_cruiser.glb"}) {
-        const std::string name = scene;
-        benchmark::RegisterBenchmark(("OwnObjectBuild/" + name).c_str(),
-                                     [name](benchmark::State& s) { own_object_build(s, name); })
-            ->Arg(1)
-            ->Arg(2)
-            ->ArgName("threads")
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-        benchmark::RegisterBenchmark(("OwnTreeBuild/" + name).c_str(),
-                                     [name](benchmark::State& s) { own_tree_build(s, name); })
-            ->Arg(1)
-            ->Arg(2)
-            ->ArgName("threads")
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-        benchmark::RegisterBenchmark(("EmbreeSceneBuild/" + name).c_str(),
-                                     [name](benchmark::State& s) { embree_scene_build(s, name); })
-            ->Arg(1)
-            ->Arg(2)
-            ->ArgName("threads")
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-    }
+    using Measure = void (*)(benchmark::State&, const std::string&);
+    const std::pair<const char*, Measure> measures[] = {{"OwnObjectBuild/", own_object_build},
+                                                        {"OwnTreeBuild/", own_tree_build},
+                                                        {"EmbreeSceneBuild/", embree_scene_build}};
+    for (const char* scene : {"default", "cg57_cruiser.glb"})
+        for (const auto& [prefix, measure] : measures) {
+            const std::string name = scene;
+            benchmark::RegisterBenchmark(
+                (prefix + name).c_str(),
+                [name, measure = measure](benchmark::State& s) { measure(s, name); })
+                ->Arg(1)
+                ->Arg(2)
+                ->ArgName("threads")
+                ->Unit(benchmark::kMillisecond)
+                ->UseManualTime();
+        }
 }
 
 }  // namespace

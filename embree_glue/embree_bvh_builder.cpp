@@ -14,6 +14,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "embree_glue/embree_geometry.h"
 #include "rebraid/error.h"
 
 namespace rebraid::glue {
@@ -205,18 +206,6 @@ private:
 
 // ---- Helpers -------------------------------------------------------------------------------
 
-RTCBuildQuality to_embree(EmbreeBuildQuality quality) {
-    switch (quality) {
-        case EmbreeBuildQuality::low:
-            return RTC_BUILD_QUALITY_LOW;
-        case EmbreeBuildQuality::medium:
-            return RTC_BUILD_QUALITY_MEDIUM;
-        case EmbreeBuildQuality::high:
-            return RTC_BUILD_QUALITY_HIGH;
-    }
-    throw Error("EmbreeBvhBuilderSettings: unknown quality " + std::to_string(int(quality)));
-}
-
 struct BvhReleaser {
     void operator()(RTCBVH bvh) const { rtcReleaseBVH(bvh); }
 };
@@ -325,7 +314,7 @@ ObjectBvh build_object_bvh_embree(EmbreeDevice& device, const Mesh& mesh,
         });
     }
     RTCBuildArguments arguments = rtcDefaultBuildArguments();
-    arguments.buildQuality = to_embree(settings.quality);
+    arguments.buildQuality = to_embree_quality(settings.quality);
     arguments.maxBranchingFactor = settings.max_branching_factor;
     arguments.maxDepth = settings.max_depth;
     arguments.sahBlockSize = settings.sah_block_size;

@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "embree_glue/embree_geometry.h"
 #include "rebraid/build_timer.h"
 #include "rebraid/error.h"
 
@@ -15,87 +16,19 @@ namespace rebraid::glue {
 
 namespace {
 
-RTCBuildQuality to_embree(EmbreeBuildQuality quality) {
-    switch (quality) {
-        case EmbreeBuildQuality::low:
-            return RTC_BUILD_QUALITY_LOW;
-        case EmbreeBuildQuality::high:
-            return RTC_BUILD_QUALITY_HIGH;
-        case EmbreeBuildQuality::medium:
-            break;
-    }
-    return RTC_BUILD_QUALITY_MEDIUM;
-}
-
 void configure_scene(EmbreeDevice& device, RTCScene scene, const EmbreeReferenceSettings& settings,
                      bool is_dynamic) {
     int flags = settings.is_robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE;
     if (is_dynamic) flags |= RTC_SCENE_FLAG_DYNAMIC;
     rtcSetSceneFlags(scene, static_cast<RTCSceneFlags>(flags));
     device.throw_if_error("rtcSetSceneFlags");
-    rtcSetSceneBuildQuality(scene, to_embree(settings.build_quality));
+    rtcSetSceneBuildQuality(scene, to_embree_quality(settings.build_quality));
     device.throw_if_error("rtcSetSceneBuildQuality");
 }
 
 void commit_scene(EmbreeDevice& device, RTCScene scene, const char* what) {
     rtcCommitScene(scene);
     device.throw_if_error(what);
-}
-
-/// Writes `mesh`'s positions, mapped by `to_world` (object space when null), into the
-/// geometry's vertex buffer.
-void write_vertices(RTCGeometry geometry, const Mesh& mesh, const AffineTransform* to_world) {
-    auto* vertices =
-        static_cast<Vec3f*>(rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0));
-    if (to_world != nullptr) {
-        std::transform(mesh.positions.begin(), mesh.positions.end(), vertices,
-                       [&](Vec3f p) { return to_world->transform_point(p); });
-    } else {
-        std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
-    }
-}
-
-/// A new triangle geometry holding `mesh` (mapped by `to_world` when not null), committed and
-/// attached to `scene` as `geom_id`. Returns the geometry, borrowed from the scene.
-RTCGeometry attach_mesh(EmbreeDevice& device, RTCScene scene, const Mesh& mesh,
-                        const AffineTransform* to_world, unsigned int geom_id,
-                        RTCBuildQuality quality) {
-    RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
-    device.throw_if_error("rtcNewGeometry(triangles)");
-    if (geometry == nullptr) throw Error("rtcNewGeometry: Embree returned no geometry");
-    // Embree's own buffers are padded for its 16-byte vertex loads.
-    void* vertices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                             sizeof(Vec3f), mesh.positions.size());
-    auto* indices = static_cast<Triangle*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                sizeof(Triangle), mesh.triangles.size()));
-    device.throw_if_error("rtcSetNewGeometryBuffer");
-    if (vertices == nullptr || indices == nullptr) {
-        rtcReleaseGeometry(geometry);
-        throw Error("rtcSetNewGeometryBuffer: Embree returned no buffer");
-    }
-    write_vertices(geometry, mesh, to_world);
-    std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
-    rtcSetGeometryBuildQuality(geometry, quality);
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometryByID(scene, geometry, geom_id);
-    rtcReleaseGeometry(geometry);  // the scene holds its own reference
-    device.throw_if_error("rtcAttachGeometryByID(triangles)");
-    return geometry;
-}
-
-RTCRay to_rtc_ray(const Ray& ray) {
-    RTCRay out{};
-    out.org_x = ray.org.x;
-    out.org_y = ray.org.y;
-    out.org_z = ray.org.z;
-    out.tnear = ray.tnear;
-    out.dir_x = ray.dir.x;
-    out.dir_y = ray.dir.y;
-    out.dir_z = ray.dir.z;
-    out.tfar = ray.tfar;
-    out.mask = std::numeric_limits<unsigned int>::max();
-    return out;
 }
 
 /// False for a ray Embree must not see: an empty segment is a miss; what Debian's Embree
@@ -160,10 +93,12 @@ void EmbreeDynamicAccel::build_flat() {
         const Instance& instance = world.instances[i];
         const Mesh& mesh = world.meshes[instance.mesh_id];
         if (mesh.triangles.empty()) continue;
-        const RTCBuildQuality quality =
-            refits && is_changing[i] ? RTC_BUILD_QUALITY_REFIT : to_embree(settings_.build_quality);
-        geometries_[i] = attach_mesh(device_, top_scene_.get(), mesh, &instance.object_to_world,
-                                     static_cast<unsigned int>(i), quality);
+        const RTCBuildQuality quality = refits && is_changing[i]
+                                            ? RTC_BUILD_QUALITY_REFIT
+                                            : to_embree_quality(settings_.build_quality);
+        geometries_[i] =
+            attach_triangle_mesh(device_, top_scene_.get(), mesh, &instance.object_to_world,
+                                 static_cast<unsigned int>(i), quality);
     }
     commit_scene(device_, top_scene_.get(), "rtcCommitScene");
 }
@@ -177,9 +112,9 @@ void EmbreeDynamicAccel::build_instanced() {
         EmbreeSceneHandle& mesh_scene = mesh_scenes_.emplace_back(device_);
         configure_scene(device_, mesh_scene.get(), settings_, is_dynamic);
         if (!world.meshes[m].triangles.empty())
-            geometries_[m] = attach_mesh(
+            geometries_[m] = attach_triangle_mesh(
                 device_, mesh_scene.get(), world.meshes[m], nullptr, 0,
-                is_dynamic ? RTC_BUILD_QUALITY_REFIT : to_embree(settings_.build_quality));
+                is_dynamic ? RTC_BUILD_QUALITY_REFIT : to_embree_quality(settings_.build_quality));
         commit_scene(device_, mesh_scene.get(), "rtcCommitScene(mesh)");
     }
     configure_scene(device_, top_scene_.get(), settings_, true);
@@ -254,7 +189,7 @@ EmbreeFrameTimes EmbreeDynamicAccel::update() {
 Hit EmbreeDynamicAccel::intersect_counted(const Ray& ray, TraversalCounters* /*counters*/) const {
     if (!is_traceable(ray)) return Hit{};
     RTCRayHit rayhit{};
-    rayhit.ray = to_rtc_ray(ray);
+    rayhit.ray = to_embree_ray(ray);
     rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -274,7 +209,7 @@ Hit EmbreeDynamicAccel::intersect_counted(const Ray& ray, TraversalCounters* /*c
 
 bool EmbreeDynamicAccel::occluded(const Ray& ray) const {
     if (!is_traceable(ray)) return false;
-    RTCRay rtc_ray = to_rtc_ray(ray);
+    RTCRay rtc_ray = to_embree_ray(ray);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     rtcOccluded1(top_scene_.get(), &context, &rtc_ray);

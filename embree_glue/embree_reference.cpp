@@ -9,36 +9,11 @@
 #include <string>
 #include <type_traits>
 
+#include "embree_glue/embree_geometry.h"
 #include "rebraid/error.h"
 
 namespace rebraid::glue {
 namespace {
-
-// Embree reads instance transforms straight from our AffineTransform and vertex/index data
-// is copied as whole Vec3f/Triangle records: both must be exactly the packed float/uint
-// layouts Embree names RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, RTC_FORMAT_FLOAT3 and
-// RTC_FORMAT_UINT3.
-static_assert(std::is_standard_layout_v<Vec3f> && sizeof(Vec3f) == 3 * sizeof(float));
-static_assert(sizeof(Triangle) == 3 * sizeof(unsigned int));
-static_assert(std::is_standard_layout_v<AffineTransform> &&
-              sizeof(AffineTransform) == 12 * sizeof(float));
-static_assert(offsetof(AffineTransform, col_x) == 0 * sizeof(float) &&
-              offsetof(AffineTransform, col_y) == 3 * sizeof(float) &&
-              offsetof(AffineTransform, col_z) == 6 * sizeof(float) &&
-              offsetof(AffineTransform, translation) == 9 * sizeof(float));
-
-RTCBuildQuality to_embree(EmbreeBuildQuality quality) {
-    switch (quality) {
-        case EmbreeBuildQuality::low:
-            return RTC_BUILD_QUALITY_LOW;
-        case EmbreeBuildQuality::medium:
-            return RTC_BUILD_QUALITY_MEDIUM;
-        case EmbreeBuildQuality::high:
-            return RTC_BUILD_QUALITY_HIGH;
-    }
-    throw Error("EmbreeReferenceSettings: unknown build quality " +
-                std::to_string(static_cast<int>(quality)));
-}
 
 /// Drops our reference to a geometry; a scene it is attached to holds its own.
 struct GeometryReleaser {
@@ -57,48 +32,13 @@ void configure_scene(EmbreeDevice& device, RTCScene scene,
                      const EmbreeReferenceSettings& settings) {
     rtcSetSceneFlags(scene, settings.is_robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     device.throw_if_error("rtcSetSceneFlags");
-    rtcSetSceneBuildQuality(scene, to_embree(settings.build_quality));
+    rtcSetSceneBuildQuality(scene, to_embree_quality(settings.build_quality));
     device.throw_if_error("rtcSetSceneBuildQuality");
 }
 
 void commit_scene(EmbreeDevice& device, RTCScene scene) {
     rtcCommitScene(scene);
     device.throw_if_error("rtcCommitScene");
-}
-
-/// Attaches `mesh` as triangle geometry `geom_id` of `scene`, its vertices mapped by
-/// `to_world` (object space when null).
-void attach_triangle_mesh(EmbreeDevice& device, RTCScene scene, const Mesh& mesh,
-                          const AffineTransform* to_world, unsigned int geom_id,
-                          const EmbreeReferenceSettings& settings) {
-    GeometryReference geometry = new_geometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    // Buffers Embree allocates itself are padded so that its 16-byte loads of the last vertex
-    // stay in bounds; a shared buffer over Mesh::positions would not be.
-    auto* vertices = static_cast<Vec3f*>(
-        rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                sizeof(Vec3f), mesh.positions.size()));
-    device.throw_if_error("rtcSetNewGeometryBuffer(vertex)");
-    auto* indices = static_cast<Triangle*>(
-        rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                sizeof(Triangle), mesh.triangles.size()));
-    device.throw_if_error("rtcSetNewGeometryBuffer(index)");
-    if (vertices == nullptr || indices == nullptr)
-        throw Error("rtcSetNewGeometryBuffer: Embree returned no buffer");
-
-    if (to_world != nullptr) {
-        std::transform(mesh.positions.begin(), mesh.positions.end(), vertices,
-                       [&](Vec3f p) { return to_world->transform_point(p); });
-    } else {
-        std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
-    }
-    std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
-
-    // Only matters at low scene quality, where Embree builds one BVH per geometry.
-    rtcSetGeometryBuildQuality(geometry.get(), to_embree(settings.build_quality));
-    rtcCommitGeometry(geometry.get());
-    device.throw_if_error("rtcCommitGeometry(triangles)");
-    rtcAttachGeometryByID(scene, geometry.get(), geom_id);
-    device.throw_if_error("rtcAttachGeometryByID(triangles)");
 }
 
 /// What happens to a ray before it may reach Embree.
@@ -156,23 +96,6 @@ EmbreeRayLimits instanced_ray_limits(const Scene& scene) {
     return limits;
 }
 
-RTCRay to_embree(const Ray& ray) {
-    RTCRay out{};
-    out.org_x = ray.org.x;
-    out.org_y = ray.org.y;
-    out.org_z = ray.org.z;
-    out.tnear = ray.tnear;
-    out.dir_x = ray.dir.x;
-    out.dir_y = ray.dir.y;
-    out.dir_z = ray.dir.z;
-    out.time = 0.0f;
-    out.tfar = ray.tfar;
-    out.mask = std::numeric_limits<unsigned int>::max();  // every geometry is visible
-    out.id = 0;
-    out.flags = 0;
-    return out;
-}
-
 /// Which Embree id names the instance in a hit.
 enum class InstanceIdSource { geom_id, inst_id };
 
@@ -180,7 +103,7 @@ Hit intersect_scene(RTCScene scene, const Ray& ray, InstanceIdSource source,
                     const EmbreeRayLimits& limits, const char* accel_name) {
     if (check_ray(ray, limits, accel_name) == RayCheck::empty_segment) return Hit{};
     RTCRayHit rayhit{};
-    rayhit.ray = to_embree(ray);
+    rayhit.ray = to_embree_ray(ray);
     rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -201,7 +124,7 @@ Hit intersect_scene(RTCScene scene, const Ray& ray, InstanceIdSource source,
 bool occluded_scene(RTCScene scene, const Ray& ray, const EmbreeRayLimits& limits,
                     const char* accel_name) {
     if (check_ray(ray, limits, accel_name) == RayCheck::empty_segment) return false;
-    RTCRay embree_ray = to_embree(ray);
+    RTCRay embree_ray = to_embree_ray(ray);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     rtcOccluded1(scene, &context, &embree_ray);
@@ -249,7 +172,8 @@ EmbreeFlatAccel::EmbreeFlatAccel(const Scene& scene, const EmbreeReferenceSettin
         if (mesh.triangles.empty()) continue;  // nothing to hit: no geometry, the id stays unused
         try {
             attach_triangle_mesh(device_, scene_.get(), mesh, &instance.object_to_world,
-                                 static_cast<unsigned int>(i), settings);
+                                 static_cast<unsigned int>(i),
+                                 to_embree_quality(settings.build_quality));
         } catch (const Error& error) {
             throw Error("EmbreeFlatAccel: instance " + std::to_string(i) + " (mesh " +
                         std::to_string(instance.mesh_id) + "): " + error.what());
@@ -296,7 +220,8 @@ EmbreeInstancedAccel::EmbreeInstancedAccel(const Scene& scene,
             EmbreeSceneHandle& mesh_scene = mesh_scenes_.emplace_back(device_);
             configure_scene(device_, mesh_scene.get(), settings);
             if (!mesh.triangles.empty())
-                attach_triangle_mesh(device_, mesh_scene.get(), mesh, nullptr, 0, settings);
+                attach_triangle_mesh(device_, mesh_scene.get(), mesh, nullptr, 0,
+                                     to_embree_quality(settings.build_quality));
             commit_scene(device_, mesh_scene.get());
         } catch (const Error& error) {
             throw Error("EmbreeInstancedAccel: mesh " + std::to_string(m) + " ('" + mesh.name +

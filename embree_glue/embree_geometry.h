@@ -1,0 +1,30 @@
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include "embree_glue/embree_device.h"
+#include "embree_glue/embree_reference.h"
+#include "rebraid/ray.h"
+#include "rebraid/scene.h"
+#include "rebraid/transform.h"
+
+namespace rebraid::glue {
+
+/// Embree's name for `quality`.
+RTCBuildQuality to_embree_quality(EmbreeBuildQuality quality);
+
+/// `ray` as Embree's single ray: visible to every geometry, time 0, no id or flags.
+RTCRay to_embree_ray(const Ray& ray);
+
+/// Writes `mesh`'s positions, mapped by `to_world` (object space when null), into `geometry`'s
+/// vertex buffer, which must hold as many vertices.
+void write_vertices(RTCGeometry geometry, const Mesh& mesh, const AffineTransform* to_world);
+
+/// A new triangle geometry holding `mesh` (its vertices mapped by `to_world`, object space
+/// when null), built at `quality`, committed and attached to `scene` as `geom_id`. Returns the
+/// geometry, borrowed from the scene (which holds the only reference).
+RTCGeometry attach_triangle_mesh(EmbreeDevice& device, RTCScene scene, const Mesh& mesh,
+                                 const AffineTransform* to_world, unsigned int geom_id,
+                                 RTCBuildQuality quality);
+
+}  // namespace rebraid::glue
