@@ -11,12 +11,22 @@
 // Time is the mean update time per frame (manual time; making the frame's positions and
 // computing the SAH counters are excluded). Counters: sah (after the last frame), sah_mean
 // (over the frames), vs_rebuild (sah over the SAH of a fresh build of the last frame),
-// rebuilds (frames on which the strategy rebuilt). rotate_lazy searches a node for rotations
-// only when its children grew by 1% since its last search (min_growth_to_search = 0.01);
-// restructure_rotates runs the rotation pass instead of a plain refit before restructuring.
+// rebuilds (frames on which the strategy rebuilt), repairs (frames on which auto ran its
+// repair pass), cpu_ms (process CPU time per frame of the updates alone: at 1 thread the
+// figure least disturbed by other work on the machine). rotate_lazy searches a node for
+// rotations only when its children grew by 1% since its last search (min_growth_to_search =
+// 0.01; rotate_lazy_0.003: 0.3%); rotate_no_search is the rotation pass without its move
+// search and refit_pre_split a refit of the same one-triangle-per-leaf tree (the cost
+// rotations add is measured against them); rotate_eager searches every node every pass
+// (Kopta's schedule, today also the default); restructure_rotates runs the rotation pass
+// instead of a plain refit before restructuring; treelet_pre_split samples treelets in a
+// tree of one triangle per leaf (default root_fraction, or 0.2);
+// auto_<repair> is auto with that repair between its two factors (plain auto: refit only).
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+
+#include <time.h>
 
 #include <cmath>
 #include <cstdio>
@@ -97,6 +107,13 @@ private:
     std::vector<rebraid::Vec3f> velocity_;
 };
 
+/// CPU time of the whole process so far, in milliseconds.
+double process_cpu_ms() {
+    timespec now{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+    return double(now.tv_sec) * 1e3 + double(now.tv_nsec) * 1e-6;
+}
+
 const Animation& animation(const std::string& name) {
     static const TwistAnimation twist;
     static const ExplodeAnimation explode;
@@ -111,9 +128,7 @@ struct Variant {
 std::vector<Variant> variants() {
     using rebraid::UpdateStrategy;
     std::vector<Variant> list;
-    for (UpdateStrategy strategy :
-         {UpdateStrategy::rebuild, UpdateStrategy::refit, UpdateStrategy::rotate,
-          UpdateStrategy::restructure, UpdateStrategy::automatic}) {
+    for (UpdateStrategy strategy : rebraid::kUpdateStrategies) {
         rebraid::ObjectBvhUpdateSettings settings;
         settings.strategy = strategy;
         list.push_back({std::string(rebraid::update_strategy_name(strategy)), settings});
@@ -122,12 +137,40 @@ std::vector<Variant> variants() {
             list.push_back({"restructure_rotates", settings});
             settings.restructure_rotates = false;
         }
+        if (strategy == UpdateStrategy::treelet) {
+            settings.build.max_leaf_size = 1;
+            list.push_back({"treelet_pre_split", settings});
+            settings.treelet.root_fraction = 0.2;
+            list.push_back({"treelet_pre_split_0.2", settings});
+            settings.build = {};
+            settings.treelet = {};
+        }
+        if (strategy == UpdateStrategy::refit) {
+            settings.build.max_leaf_size = 1;
+            list.push_back({"refit_pre_split", settings});
+            settings.build = {};
+        }
         if (strategy == UpdateStrategy::rotate) {
+            settings.rotation.max_rotations_per_node = 0;
+            list.push_back({"rotate_no_search", settings});
+            settings.rotation.max_rotations_per_node = 1;
             settings.rotation.min_growth_to_search = 0.01f;
             list.push_back({"rotate_lazy", settings});
+            settings.rotation.min_growth_to_search = 0.003f;
+            list.push_back({"rotate_lazy_0.003", settings});
             settings.rotation.min_growth_to_search = 0.0f;
+            list.push_back({"rotate_eager", settings});
+            settings.rotation = {};
             settings.rotation.leaf_mode = rebraid::RotationLeafMode::split_merge;
             list.push_back({"rotate_split_merge", settings});
+        }
+        if (strategy == UpdateStrategy::automatic) {
+            for (UpdateStrategy repair :
+                 {UpdateStrategy::treelet, UpdateStrategy::restructure, UpdateStrategy::rotate}) {
+                settings.auto_repair = repair;
+                list.push_back(
+                    {"auto_" + std::string(rebraid::update_strategy_name(repair)), settings});
+            }
         }
     }
     return list;
@@ -138,17 +181,22 @@ void run_animation(benchmark::State& state, const std::string& scene, const Vari
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                 std::size_t(state.range(0)));
     rebraid::Mesh mesh = anim.rest();
-    double total_ms = 0.0, sah_sum = 0.0, sah = 0.0;
-    int rebuilds = 0;
+    double total_ms = 0.0, sah_sum = 0.0, sah = 0.0, cpu_ms = 0.0;
+    int rebuilds = 0, repairs = 0;
     for (auto _ : state) {
         rebraid::ObjectBvhUpdater updater(variant.settings);
         rebraid::ObjectBvh bvh = rebraid::build_object_bvh(anim.rest(), updater.rebuild_settings());
-        total_ms = sah_sum = 0.0;
-        rebuilds = 0;
+        total_ms = sah_sum = cpu_ms = 0.0;
+        rebuilds = repairs = 0;
         for (int frame = 1; frame <= g_frame_count; ++frame) {
             anim.pose(float(frame) / float(g_frame_count), mesh);
+            const double cpu_before = process_cpu_ms();
             const rebraid::ObjectBvhUpdateReport report = updater.update(mesh, bvh);
+            cpu_ms += process_cpu_ms() - cpu_before;
             total_ms += report.update_ms;
+            repairs += variant.settings.strategy == rebraid::UpdateStrategy::automatic &&
+                       report.applied != rebraid::UpdateStrategy::rebuild &&
+                       report.applied != rebraid::UpdateStrategy::refit;
             sah_sum += report.sah;
             sah = report.sah;
             rebuilds += report.applied == rebraid::UpdateStrategy::rebuild;
@@ -160,6 +208,8 @@ void run_animation(benchmark::State& state, const std::string& scene, const Vari
     state.counters["sah_mean"] = sah_sum / g_frame_count;
     state.counters["vs_rebuild"] = sah / fresh_sah;
     state.counters["rebuilds"] = rebuilds;
+    state.counters["repairs"] = repairs;
+    state.counters["cpu_ms"] = cpu_ms / g_frame_count;
     state.counters["tris"] = double(mesh.triangles.size());
 }
 
@@ -198,6 +248,11 @@ int main(int argc, char** argv) {
     const rebraid::ObjectBvhUpdateSettings defaults;
     benchmark::AddCustomContext("frames", std::to_string(g_frame_count));
     benchmark::AddCustomContext("rebuild_sah_factor", std::to_string(defaults.rebuild_sah_factor));
+    benchmark::AddCustomContext("repair_sah_factor", std::to_string(defaults.repair_sah_factor));
+    benchmark::AddCustomContext(
+        "treelet",
+        "root_fraction=" + std::to_string(defaults.treelet.root_fraction) +
+            " max_treelet_leaves=" + std::to_string(defaults.treelet.max_treelet_leaves));
     benchmark::AddCustomContext(
         "restructure",
         "max_rebuilt_fraction=" + std::to_string(defaults.restructure.max_rebuilt_fraction) +

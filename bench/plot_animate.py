@@ -4,7 +4,7 @@
 Usage: plot_animate.py FRAMES.csv OUT.png
 
 One line per method (frame_ms = animation + update + top level + render), Embree's methods
-dashed. Needs matplotlib (Debian: python3-matplotlib, run with /usr/bin/python3).
+dashed, rebraid-incremental dotted. Needs matplotlib (Debian: python3-matplotlib, run with /usr/bin/python3).
 """
 import csv
 import sys
@@ -33,7 +33,8 @@ def main():
     # tab20: a distinct colour for each of up to 20 methods (the default cycle has 10).
     colours = plt.get_cmap("tab20").colors
     for index, (method, (frames, times)) in enumerate(series.items()):
-        style = "--" if method.startswith("embree") else "-"
+        # Embree dashed, the incremental top dotted (it shares colours' neighbours with rebraid).
+        style = "--" if method.startswith("embree") else (":" if "incremental" in method else "-")
         ax.plot(frames, times, style, label=method, linewidth=1.5,
                 color=colours[index % len(colours)])
     ax.set_xlabel("frame")

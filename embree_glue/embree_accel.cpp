@@ -2,8 +2,10 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,6 +67,30 @@ std::unique_ptr<InstancedAccel> build_top(const Scene& scene, std::vector<Object
                                             info);
 }
 
+/// Embree's world-to-object map of each instance (index = InstanceId).
+std::vector<AffineTransform> embree_world_to_object_maps(const Scene& scene) {
+    std::vector<AffineTransform> maps;
+    maps.reserve(scene.instances.size());
+    for (const Instance& instance : scene.instances)
+        maps.push_back(glue::embree_world_to_object(instance.object_to_world));
+    return maps;
+}
+
+/// index = MeshId, then PrimId: where the triangle sits in its object BVH's leaf order
+/// (kInvalidId for a triangle the BVH does not hold).
+std::vector<std::vector<std::uint32_t>> leaf_positions_of(const InstancedAccel& accel) {
+    std::vector<std::vector<std::uint32_t>> positions(accel.object_bvhs().size());
+    for (std::size_t m = 0; m < positions.size(); ++m) {
+        const std::vector<PrimId>& prim_ids = accel.object_bvhs()[m].prim_ids;
+        const PrimId largest =
+            prim_ids.empty() ? 0 : *std::max_element(prim_ids.begin(), prim_ids.end());
+        positions[m].assign(prim_ids.empty() ? 0 : std::size_t(largest) + 1, kInvalidId);
+        for (std::size_t i = 0; i < prim_ids.size(); ++i)
+            positions[m][prim_ids[i]] = std::uint32_t(i);
+    }
+    return positions;
+}
+
 }  // namespace
 
 void EmbreeAccelSettings::validate() const {
@@ -83,10 +109,13 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
     settings_.validate();
     if (scene_ == nullptr) throw Error("EmbreeAccel: the scene is null");
     is_ray_mask_supported_ = is_ray_mask_supported(scene_);
+    arithmetic_ = glue::detect_embree_kernel_arithmetic();
     converted_ = convert_now();
+    embree_world_to_object_ = embree_world_to_object_maps(converted_.scene);
     object_builder_ = make_object_builder(settings_);
     accel_ = std::make_unique<InstancedAccel>(
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
+    leaf_positions_ = leaf_positions_of(*accel_);
     bounds_ = converted_.scene.bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
 }
@@ -127,18 +156,46 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     ray.tfar = in.tfar;
     const Hit hit = accel_->intersect(ray);
     if (!hit.is_hit()) return;
-    const Scene& scene = converted_.scene;
-    const Mesh& mesh = scene.meshes[scene.instances[hit.instance_id].mesh_id];
-    const std::array<Vec3f, 3> corners = mesh.corners(hit.prim_id);
-    // Embree's geometry normal: cross(v2 - v0, v0 - v1), in object space, not normalised.
-    const Vec3f normal = cross(corners[2] - corners[0], corners[0] - corners[1]);
+    const MeshId mesh_id = converted_.scene.instances[hit.instance_id].mesh_id;
     const glue::EmbreeHitIds& ids = converted_.instance_ids[hit.instance_id];
-    rayhit.ray.tfar = hit.t;
+    // The corners from the object BVH's leaf copy, which the traversal has just read (the
+    // mesh's index and vertex arrays would cost two dependent cache misses on large scenes).
+    std::array<Vec3f, 3> corners;
+    const std::vector<std::uint32_t>& positions = leaf_positions_[mesh_id];
+    const std::uint32_t position =
+        hit.prim_id < positions.size() ? positions[hit.prim_id] : kInvalidId;
+    if (position != kInvalidId) {
+        const TriangleVerts& triangle = accel_->object_bvhs()[mesh_id].triangles[position];
+        corners = {triangle.v0, triangle.v1, triangle.v2};
+    } else {
+        corners = converted_.scene.meshes[mesh_id].corners(hit.prim_id);
+    }
+    // Our traversal found the triangle and t; the reported attributes are computed again the
+    // way Embree computes them (its world-to-object map, its kernel's rounding), so that they
+    // agree with rtcIntersect1 to the last bit where Embree finds the same triangle.
+    const bool is_instanced = ids.inst_id != RTC_INVALID_GEOMETRY_ID;
+    const std::optional<glue::EmbreeHitAttributes> embree_hit = glue::embree_hit_attributes(
+        ray, is_instanced ? &embree_world_to_object_[hit.instance_id] : nullptr, corners,
+        arithmetic_);
+    float t = hit.t, u = hit.u, v = hit.v;
+    Vec3f normal;
+    if (embree_hit) {
+        normal = embree_hit->geometry_normal;
+        u = embree_hit->u;
+        v = embree_hit->v;
+        // Embree's t when it lies in the ray's interval (it does but for rounding at the
+        // interval's ends), so that t, u and v describe the same point.
+        if (embree_hit->t >= in.tnear && embree_hit->t <= in.tfar) t = embree_hit->t;
+    } else {
+        // Parallel in Embree's rounding (a grazing hit Embree would not report): our answer.
+        normal = cross(corners[2] - corners[0], corners[0] - corners[1]);
+    }
+    rayhit.ray.tfar = t;
     rayhit.hit.Ng_x = normal.x;
     rayhit.hit.Ng_y = normal.y;
     rayhit.hit.Ng_z = normal.z;
-    rayhit.hit.u = hit.u;
-    rayhit.hit.v = hit.v;
+    rayhit.hit.u = u;
+    rayhit.hit.v = v;
     rayhit.hit.primID = hit.prim_id;
     rayhit.hit.geomID = ids.geom_id;
     rayhit.hit.instID[0] = ids.inst_id;
@@ -189,9 +246,13 @@ EmbreeUpdateReport EmbreeAccel::update() {
         report.meshes_unchanged = std::uint32_t(next.scene.meshes.size() - changed.size());
         next_accel = build_top(next.scene, std::move(object_bvhs), settings_.rebraid, timer);
     }
+    std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
+    std::vector<std::vector<std::uint32_t>> leaf_positions = leaf_positions_of(*next_accel);
     bounds_ = next.scene.bounds();
     converted_ = std::move(next);
     accel_ = std::move(next_accel);
+    embree_world_to_object_ = std::move(world_to_object);
+    leaf_positions_ = std::move(leaf_positions);
     report.update_ms = timer.elapsed_ms();
     return report;
 }

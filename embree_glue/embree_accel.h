@@ -8,6 +8,7 @@
 
 #include "embree_glue/embree_accel_scene.h"
 #include "embree_glue/embree_bvh_builder.h"
+#include "embree_glue/embree_hit_attributes.h"
 #include "rebraid/accel.h"
 #include "rebraid/build_settings.h"
 #include "rebraid/instanced_accel.h"
@@ -90,6 +91,12 @@ public:
     /// (rtcGetDeviceProperty RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) a ray with mask 0 sees
     /// nothing, any other mask sees everything (every geometry has the default mask, or
     /// construction threw). ray.time, ray.flags and ray.id are ignored (no motion blur).
+    /// Once the project's traversal has found the hit, tfar, u, v and Ng are computed again as
+    /// Embree computes them (glue::embree_hit_attributes: its world-to-object map and the
+    /// rounding of the kernels it runs on this CPU), so where both find the same triangle they
+    /// equal rtcIntersect1's to the last bit (measured: Embree's AVX2 kernels on every shared
+    /// scene, its AVX and SSE4.2 kernels on random instanced triangles; its AVX-512 kernels
+    /// may differ in the last bit).
     void intersect1(RTCRayHit& rayhit) const noexcept;
     /// rtcOccluded1: sets ray.tfar to -inf when any hit exists in [tnear, tfar], else leaves
     /// the ray untouched. Same ray conventions as intersect1.
@@ -122,9 +129,17 @@ private:
     EmbreeAccelSettings settings_;
     ObjectBvhBuilder object_builder_;
     bool is_ray_mask_supported_ = false;
+    /// How Embree rounds on this machine: the hit attributes are computed the same way.
+    glue::EmbreeKernelArithmetic arithmetic_ = glue::EmbreeKernelArithmetic::separate;
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;
+    /// index = InstanceId: Embree's world-to-object map of the instance (its float inverse of
+    /// the registered transform, rounded as Embree rounds it); unused for root-scene meshes.
+    std::vector<AffineTransform> embree_world_to_object_;
+    /// index = MeshId, then PrimId: the triangle's position in its object BVH's leaf order,
+    /// where intersect1 reads its corners.
+    std::vector<std::vector<std::uint32_t>> leaf_positions_;
     /// index = MeshId: the state of each mesh's updates (reset by a full rebuild).
     std::vector<std::unique_ptr<ObjectBvhUpdater>> updaters_;
 };

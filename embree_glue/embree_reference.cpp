@@ -133,21 +133,24 @@ bool occluded_scene(RTCScene scene, const Ray& ray, const EmbreeRayLimits& limit
     return embree_ray.tfar == -std::numeric_limits<float>::infinity();
 }
 
-/// Counts shared by both structures; build time and memory are filled in after the build.
-AccelStats input_stats(const Scene& scene) {
-    AccelStats stats;
-    stats.triangles = scene.instanced_triangle_count();
-    stats.instances = scene.instances.size();
-    stats.meshes = scene.meshes.size();
-    return stats;
-}
-
 void validate_input(const Scene& scene, const char* accel_name) {
     try {
         scene.validate();
     } catch (const Error& error) {
         throw Error(std::string(accel_name) + ": " + error.what());
     }
+}
+
+/// Counts shared by both structures; build time and memory are filled in after the build.
+/// Validates first: counting follows instance -> mesh ids, which an invalid scene may have
+/// out of range (the constructors call this before their bodies run).
+AccelStats validated_input_stats(const Scene& scene, const char* accel_name) {
+    validate_input(scene, accel_name);
+    AccelStats stats;
+    stats.triangles = scene.instanced_triangle_count();
+    stats.instances = scene.instances.size();
+    stats.meshes = scene.meshes.size();
+    return stats;
 }
 
 double milliseconds_since(std::chrono::steady_clock::time_point start) {
@@ -160,8 +163,9 @@ double milliseconds_since(std::chrono::steady_clock::time_point start) {
 // ---- EmbreeFlatAccel ---------------------------------------------------------------------
 
 EmbreeFlatAccel::EmbreeFlatAccel(const Scene& scene, const EmbreeReferenceSettings& settings)
-    : device_(settings.device_config), scene_(device_), stats_(input_stats(scene)) {
-    validate_input(scene, "EmbreeFlatAccel");
+    : device_(settings.device_config),
+      scene_(device_),
+      stats_(validated_input_stats(scene, "EmbreeFlatAccel")) {
     const auto start = std::chrono::steady_clock::now();
     configure_scene(device_, scene_.get(), settings);
     // One geometry per instance rather than one big geometry plus a prim -> (instance, prim)
@@ -206,8 +210,9 @@ AccelStats EmbreeFlatAccel::stats() const {
 
 EmbreeInstancedAccel::EmbreeInstancedAccel(const Scene& scene,
                                            const EmbreeReferenceSettings& settings)
-    : device_(settings.device_config), top_scene_(device_), stats_(input_stats(scene)) {
-    validate_input(scene, "EmbreeInstancedAccel");
+    : device_(settings.device_config),
+      top_scene_(device_),
+      stats_(validated_input_stats(scene, "EmbreeInstancedAccel")) {
     ray_limits_ = instanced_ray_limits(scene);
     const auto start = std::chrono::steady_clock::now();
 

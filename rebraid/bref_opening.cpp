@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <vector>
 
+#include "rebraid/bvh_stats.h"
+
 namespace rebraid {
 namespace {
 
@@ -14,26 +16,27 @@ constexpr std::size_t kBlock = 1024;
 
 /// Children a BRef adds to the array when opened (its first child takes its own slot).
 std::uint32_t extra_children(const BRefTarget& target, const BRefSource& source) {
-    return std::uint32_t(source.bvh_of(target).nodes[target.object_node.node_id()].child_count() - 1);
+    return bref_child_count(source, target) - 1;
 }
 
 }  // namespace
 
-OpeningCriterion::OpeningCriterion(const BBox3f& segment_bounds, float open_threshold)
+OpeningCriterion::OpeningCriterion(const BBox3f& segment_bounds, float open_threshold,
+                                   bool open_leaves_too)
     : axis(segment_bounds.largest_axis()),
-      min_extent(open_threshold * segment_bounds.extent()[segment_bounds.largest_axis()]) {}
+      min_extent(open_threshold * segment_bounds.extent()[segment_bounds.largest_axis()]),
+      open_leaves(open_leaves_too) {}
 
-std::uint32_t count_openable(std::span<const BuildPrim> prims,
-                             std::span<const BRefTarget> targets,
+std::uint32_t count_openable(std::span<const BuildPrim> prims, std::span<const BRefTarget> targets,
                              const OpeningCriterion& criterion, std::size_t parallel_threshold) {
     auto count = [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t n) {
         for (std::size_t i = r.begin(); i != r.end(); ++i)
-            n += criterion.wants_to_open(prims[i], targets[prims[i].id]);
+            n += criterion.wants_to_open(prims[i], targets[prims[i].id], i);
         return n;
     };
     if (prims.size() < parallel_threshold) return count({0, prims.size()}, 0);
-    return tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, prims.size(), kBlock), 0u,
-                                count, std::plus<>());
+    return tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, prims.size(), kBlock), 0u, count,
+                                std::plus<>());
 }
 
 std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
@@ -63,7 +66,8 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
         std::uint64_t sum = 0;
         for (std::uint32_t i = begin; i < end; ++i) {
             const BRefTarget& target = targets[prims[i].id];
-            if (criterion.wants_to_open(prims[i], target)) sum += extra_children(target, source);
+            if (criterion.wants_to_open(prims[i], target, i - first))
+                sum += extra_children(target, source);
         }
         wanted[b + 1] = sum;
     });
@@ -79,28 +83,44 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
         for (std::uint32_t i = begin; i < end && offset <= space; ++i) {
             BuildPrim& parent = prims[i];
             const BRefTarget parent_target = targets[parent.id];
-            if (!criterion.wants_to_open(parent, parent_target)) continue;
+            if (!criterion.wants_to_open(parent, parent_target, i - first)) continue;
             const std::uint32_t extra = extra_children(parent_target, source);
             if (offset + extra > space) break;  // this and every later BRef stay closed
             const ObjectBvh& bvh = source.bvh_of(parent_target);
-            const WideNode& node = bvh.nodes[parent_target.object_node.node_id()];
             const AffineTransform& to_world = source.object_to_world[parent_target.instance_id];
-            const std::uint32_t child_weight = std::max(1u, parent.weight / (extra + 1));
-            for (std::uint32_t c = 0; c <= extra; ++c) {
+            const std::uint32_t estimated_weight = std::max(1u, parent.weight / (extra + 1));
+            if (source.is_tracking_costs()) {
+                // Slot parent.id only ever belongs to one segment at a time: no race.
+                source.removed_cost[parent.id] += source.node_cost[parent.id];
+            }
+            std::uint32_t c = 0;
+            for_each_bref_child(source, parent_target, [&](NodeRef child, const BBox3f& box) {
                 const BBox3f bounds =
-                    bref_world_bounds(bvh, node.children[c], node.child_bounds(int(c)), to_world,
-                                      source.bounds_rule);
-                const BRefTarget child_target{parent_target.instance_id, node.children[c]};
+                    bref_world_bounds(bvh, child, box, to_world, source.bounds_rule);
+                const std::uint32_t weight =
+                    source.has_exact_counts()
+                        ? std::max(1u, exact_prim_count(source, parent_target, child))
+                        : estimated_weight;
+                const BRefTarget child_target{parent_target.instance_id, child};
+                const std::uint32_t child_slot =
+                    c == 0 ? parent.id : segment.next_target + std::uint32_t(offset + c - 1);
+                if (source.is_tracking_costs())
+                    source.node_cost[child_slot] =
+                        parent_target.object_node.is_leaf()
+                            ? 0.0  // a triangle of an opened leaf: no object node of its own
+                            : mapped_box_half_area(box, to_world) *
+                                  (child.is_leaf() ? child.prim_count() : 1.0);
                 if (c == 0) {  // the first child replaces its parent, keeping its target slot
-                    parent = {bounds, parent.id, child_weight};
+                    parent = {bounds, parent.id, weight};
                     targets[parent.id] = child_target;
                 } else {
                     const auto slot = std::uint32_t(offset + c - 1);
                     const std::uint32_t target_slot = segment.next_target + slot;
-                    prims[segment.end + slot] = {bounds, target_slot, child_weight};
+                    prims[segment.end + slot] = {bounds, target_slot, weight};
                     targets[target_slot] = child_target;
                 }
-            }
+                ++c;
+            });
             offset += extra;
             reached[b] = offset;
             ++opened_in_block[b];

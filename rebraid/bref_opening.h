@@ -6,39 +6,35 @@
 #include "rebraid/bbox.h"
 #include "rebraid/bref.h"
 #include "rebraid/bref_bounds.h"
+#include "rebraid/bref_children.h"
 #include "rebraid/object_bvh.h"
 #include "rebraid/transform.h"
 
 namespace rebraid {
 
-/// The object BVHs BRefs point into, and where each instance places its mesh.
-struct BRefSource {
-    std::span<const ObjectBvh> object_bvhs;          ///< index = MeshId
-    std::span<const std::uint32_t> instance_mesh;    ///< index = InstanceId
-    std::span<const AffineTransform> object_to_world;  ///< index = InstanceId
-    BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_box;
-
-    const ObjectBvh& bvh_of(const BRefTarget& target) const {
-        return object_bvhs[instance_mesh[target.instance_id]];
-    }
-};
-
 /// Paper §4.2: in a segment, find the axis of largest extent of the segment's bounds; a BRef
-/// is worth opening when it refers to an inner node (leaves cannot be opened) and its extent
-/// along that axis exceeds `open_threshold` times the segment's.
+/// is worth opening when it refers to an inner node (a leaf has nothing to open into) and its
+/// extent along that axis exceeds `open_threshold` times the segment's. With `open_leaves`, leaves
+/// of several triangles count as openable too. Other rules narrow the choice further with
+/// `selected`: one flag per BRef of the segment (index from the segment's start); only
+/// flagged BRefs are opened.
 struct OpeningCriterion {
     int axis = 0;
     float min_extent = 0.0f;
+    bool open_leaves = false;
+    std::span<const std::uint8_t> selected;
 
-    OpeningCriterion(const BBox3f& segment_bounds, float open_threshold);
-    bool wants_to_open(const BuildPrim& prim, const BRefTarget& target) const {
-        return target.object_node.is_inner() && prim.bounds.extent()[axis] > min_extent;
+    OpeningCriterion(const BBox3f& segment_bounds, float open_threshold, bool open_leaves = false);
+    /// `index`: the BRef's position from the segment's start (read only with `selected`).
+    bool wants_to_open(const BuildPrim& prim, const BRefTarget& target,
+                       std::size_t index = 0) const {
+        return is_openable(target.object_node, open_leaves) &&
+               prim.bounds.extent()[axis] > min_extent && (selected.empty() || selected[index]);
     }
 };
 
 /// How many BRefs of `prims` meet `criterion` (§5.2 splits free space by these counts).
-std::uint32_t count_openable(std::span<const BuildPrim> prims,
-                             std::span<const BRefTarget> targets,
+std::uint32_t count_openable(std::span<const BuildPrim> prims, std::span<const BRefTarget> targets,
                              const OpeningCriterion& criterion, std::size_t parallel_threshold);
 
 /// Paper §5.3: opens the BRefs of `segment` that meet `criterion`, in array order, while the
@@ -46,7 +42,8 @@ std::uint32_t count_openable(std::span<const BuildPrim> prims,
 /// it fit, so serial and parallel runs open exactly the same ones). The first child replaces
 /// the parent; its siblings are appended at the segment's end, each taking the next target
 /// slot. A child's bounds are its object box mapped to world space (conservative AABB, §5.4);
-/// its primitive count is the parent's divided by the number of children. Updates
+/// its primitive count is the parent's divided by the number of children, or the real count
+/// when `source` has exact counts. Updates
 /// `segment.end` and `segment.next_target`; returns how many BRefs were opened. Large
 /// segments are processed in parallel blocks whose output slots come from prefix sums.
 std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,

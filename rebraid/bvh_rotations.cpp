@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -13,12 +14,13 @@
 namespace rebraid {
 namespace {
 
-/// What the pass returns for a subtree: its box, cost and height, and the moves made in it.
+/// What the pass returns for a subtree: its box, cost and height. Kept small (it is
+/// returned for every leaf and node); the moves are counted in a RotationPassStats passed
+/// down instead.
 struct SubtreePass {
     BBox3f bounds;
     double cost = 0.0;
     int height = 0;  ///< inner levels: 0 for a leaf
-    RotationPassStats moves;
 };
 
 void add_moves(RotationPassStats& total, const RotationPassStats& part) {
@@ -60,6 +62,13 @@ inline void merged_half_areas(const SlotBoxes& boxes, const BBox3f& extra,
     }
 }
 
+/// Summed half areas of the first `child_count` child boxes of `node`.
+float child_area_sum(const WideNode& node, int child_count) {
+    float sum = 0.0f;
+    for (int slot = 0; slot < child_count; ++slot) sum += node.child_bounds(slot).half_area();
+    return sum;
+}
+
 /// The best move found at a node.
 struct Move {
     enum class Kind { none, swap, pull_up, exchange } kind = Kind::none;
@@ -82,6 +91,11 @@ struct InnerChild {
     int outlier;        ///< the child whose dropping shrinks G most
     SlotBoxes boxes;    ///< G's children's boxes (slots past count unused)
     SlotBoxes without;  ///< G's box without child m, per m (empty past count)
+    /// The intersection of the `without` boxes, per axis the second lowest lower bound to the
+    /// second highest upper bound of G's children (possibly inverted). G without any one child
+    /// contains it, so area(core + X) <= area(G without m + X) for every m: a lower bound on
+    /// what G becomes when X replaces one of its children, computed once instead of per m.
+    BBox3f core;
 };
 
 class RotationPass {
@@ -94,65 +108,73 @@ public:
           searched_areas_(searched_areas),
           settings_(settings) {}
 
-    SubtreePass run(NodeRef ref, int depth) {
-        if (ref.is_leaf()) {
-            const BBox3f box = refit_leaf(mesh_, bvh_, ref);
-            return {box, double(box.half_area()) * ref.prim_count(), 0, {}};
-        }
+    /// Refits and rotates the subtree at inner node `ref`, counting moves into `moves`.
+    SubtreePass run(NodeRef ref, int depth, RotationPassStats& moves) {
         const std::uint32_t node_id = ref.node_id();
         int child_count = bvh_.nodes[node_id].child_count();
         SubtreePass children[kBvhWidth];
-        const auto run_child = [&](int slot) {
-            children[slot] = run(bvh_.nodes[node_id].children[slot], depth + 1);
+        // Leaves inline (most children are leaves); inner children recurse, as parallel
+        // tasks near the root, each task counting its moves apart (sums of counts do not
+        // depend on the order they are added in).
+        const auto run_child = [&](int slot, RotationPassStats& child_moves) {
+            const NodeRef child = bvh_.nodes[node_id].children[slot];
+            if (child.is_leaf()) {
+                const BBox3f box = refit_leaf(mesh_, bvh_, child);
+                children[slot] = {box, double(box.half_area()) * child.prim_count(), 0};
+            } else {
+                children[slot] = run(child, depth + 1, child_moves);
+            }
         };
         if (depth < settings_.parallel_depth) {
-            tbb::parallel_for(0, child_count, run_child);
+            RotationPassStats child_moves[kBvhWidth];
+            tbb::parallel_for(0, child_count,
+                              [&](int slot) { run_child(slot, child_moves[slot]); });
+            for (int slot = 0; slot < child_count; ++slot) add_moves(moves, child_moves[slot]);
         } else {
-            for (int slot = 0; slot < child_count; ++slot) run_child(slot);
+            for (int slot = 0; slot < child_count; ++slot) run_child(slot, moves);
         }
         WideNode& node = bvh_.nodes[node_id];
         SubtreePass result;
+        // Slots a pull-up fills keep cost 0: the moved subtree's cost stays counted in the
+        // slot it came from, its change in the move's gain.
         int heights[kBvhWidth] = {};
         double costs[kBvhWidth] = {};
+        bool has_inner_child = false;
         for (int slot = 0; slot < child_count; ++slot) {
             node.set_child(slot, node.children[slot], children[slot].bounds);
             result.bounds.extend(children[slot].bounds);
-            add_moves(result.moves, children[slot].moves);
             heights[slot] = children[slot].height;
             costs[slot] = children[slot].cost;
+            has_inner_child = has_inner_child || heights[slot] > 0;
         }
         if (settings_.leaf_mode == RotationLeafMode::split_merge) {
-            result.moves.merges += merge_leaf_nodes(node, child_count, heights, costs);
-            result.moves.splits += split_leaves(node, child_count, heights, costs);
+            moves.merges += merge_leaf_nodes(node, child_count, heights, costs);
+            moves.splits += split_leaves(node, child_count, heights, costs);
+            has_inner_child = false;
+            for (int slot = 0; slot < child_count; ++slot)
+                has_inner_child = has_inner_child || heights[slot] > 0;
         }
         double cost_change = 0.0;
-        const float min_gain = settings_.min_relative_gain * result.bounds.half_area();
-        bool has_inner_child = false;
-        float child_areas = 0.0f;
-        for (int slot = 0; slot < child_count; ++slot) {
-            has_inner_child = has_inner_child || node.children[slot].is_inner();
-            child_areas += node.child_bounds(slot).half_area();
-        }
-        // Search only where the children grew since the last search here (the change in
-        // area that Barbier and Paulin weight their treelet sampling by).
-        const bool is_searched =
-            has_inner_child &&
-            (settings_.min_growth_to_search == 0.0f ||
-             child_areas > searched_areas_[node_id] * (1.0f + settings_.min_growth_to_search));
-        for (int round = 0; is_searched && round < settings_.max_rotations_per_node; ++round) {
-            const Move move = best_move(node, child_count, heights, depth, min_gain);
-            if (move.kind == Move::Kind::none) break;
-            apply(node, child_count, heights, move);
-            cost_change -= move.gain;
-            ++(move.kind == Move::Kind::swap      ? result.moves.swaps
-               : move.kind == Move::Kind::pull_up ? result.moves.pull_ups
-                                                  : result.moves.exchanges);
-        }
+        // Moves need an inner child. Lazy search: only where the children grew since the
+        // last search here (the change in area that Barbier and Paulin weight their treelet
+        // sampling by).
+        bool is_searched = has_inner_child && settings_.max_rotations_per_node > 0;
+        if (is_searched && settings_.min_growth_to_search > 0.0f)
+            is_searched = child_area_sum(node, child_count) >
+                          searched_areas_[node_id] * (1.0f + settings_.min_growth_to_search);
         if (is_searched) {
-            child_areas = 0.0f;
-            for (int slot = 0; slot < child_count; ++slot)
-                child_areas += node.child_bounds(slot).half_area();
-            searched_areas_[node_id] = child_areas;
+            const float min_gain = settings_.min_relative_gain * result.bounds.half_area();
+            for (int round = 0; round < settings_.max_rotations_per_node; ++round) {
+                const Move move = best_move(node, child_count, heights, depth, min_gain);
+                if (move.kind == Move::Kind::none) break;
+                apply(node, child_count, heights, move);
+                cost_change -= move.gain;
+                ++(move.kind == Move::Kind::swap      ? moves.swaps
+                   : move.kind == Move::Kind::pull_up ? moves.pull_ups
+                                                      : moves.exchanges);
+            }
+            if (settings_.min_growth_to_search > 0.0f)
+                searched_areas_[node_id] = child_area_sum(node, child_count);
         }
         result.cost = double(result.bounds.half_area()) + cost_change;
         for (int slot = 0; slot < child_count; ++slot) result.cost += costs[slot];
@@ -200,9 +222,13 @@ private:
                 set_slot_box(g.without, m,
                              m < g.count ? merge(prefix[m], suffix[m + 1]) : BBox3f{});
             g.most_shrink = -1.0f;
+            constexpr float kInf = std::numeric_limits<float>::infinity();
+            g.core = {{-kInf, -kInf, -kInf}, {kInf, kInf, kInf}};
             for (int m = 0; m < g.count; ++m) {
-                const float shrink = g.area - merge(prefix[m], suffix[m + 1]).half_area();
+                const BBox3f without = merge(prefix[m], suffix[m + 1]);
+                const float shrink = g.area - without.half_area();
                 if (shrink > g.most_shrink) g.most_shrink = shrink, g.outlier = m;
+                g.core = {max(g.core.min, without.min), min(g.core.max, without.max)};
             }
             // Adding a box never shrinks G, so no move at G gains more than most_shrink.
             if (g.most_shrink <= best.gain) continue;
@@ -217,6 +243,8 @@ private:
             // Swap: child C (slot j of N) and grandchild g (slot m of G) trade places.
             for (int j = 0; j < child_count; ++j) {
                 if (j == i) continue;
+                // No m can gain more than with G's core in place of G without m.
+                if (g.area - merge(g.core, node.child_bounds(j)).half_area() <= best.gain) continue;
                 float areas[kBvhWidth];
                 merged_half_areas(g.without, node.child_bounds(j), areas);
                 for (int m = 0; m < g.count; ++m) {
@@ -241,19 +269,27 @@ private:
                 float g_areas[kBvhWidth], g2_areas[kBvhWidth];
                 // g's outlier against each g2 child n: G = without outlier + n's box,
                 // G2 = without n + outlier's box.
+                // Each half is skipped when even G2's (G's) core taking the outlier leaves no
+                // gain: the outlier usually lies far from the other side.
                 const int m = g.outlier;
-                merged_half_areas(g2.boxes, slot_box(g.without, m), g_areas);
-                merged_half_areas(g2.without, slot_box(g.boxes, m), g2_areas);
-                for (int n = 0; n < g2.count; ++n)
-                    consider_exchange(node, child_count, heights, depth, g, m, g2, n, g_areas[n],
-                                      g2_areas[n], best);
+                const BBox3f m_box = slot_box(g.boxes, m);
+                if (g.most_shrink + g2.area - merge(g2.core, m_box).half_area() > best.gain) {
+                    merged_half_areas(g2.boxes, slot_box(g.without, m), g_areas);
+                    merged_half_areas(g2.without, m_box, g2_areas);
+                    for (int n = 0; n < g2.count; ++n)
+                        consider_exchange(node, child_count, heights, depth, g, m, g2, n,
+                                          g_areas[n], g2_areas[n], best);
+                }
                 // g2's outlier against each g child.
                 const int n = g2.outlier;
-                merged_half_areas(g.without, slot_box(g2.boxes, n), g_areas);
-                merged_half_areas(g.boxes, slot_box(g2.without, n), g2_areas);
-                for (int k = 0; k < g.count; ++k)
-                    consider_exchange(node, child_count, heights, depth, g, k, g2, n, g_areas[k],
-                                      g2_areas[k], best);
+                const BBox3f n_box = slot_box(g2.boxes, n);
+                if (g2.most_shrink + g.area - merge(g.core, n_box).half_area() > best.gain) {
+                    merged_half_areas(g.without, n_box, g_areas);
+                    merged_half_areas(g.boxes, slot_box(g2.without, n), g2_areas);
+                    for (int k = 0; k < g.count; ++k)
+                        consider_exchange(node, child_count, heights, depth, g, k, g2, n,
+                                          g_areas[k], g2_areas[k], best);
+                }
             }
         }
         return best;
@@ -474,10 +510,15 @@ RotationPassStats BvhRotator::refit_and_rotate(const Mesh& mesh, ObjectBvh& bvh,
     // from an earlier tree do no harm.
     if (heights_.size() < bvh.nodes.size()) heights_.resize(bvh.nodes.size());
     if (searched_areas_.size() < bvh.nodes.size()) searched_areas_.resize(bvh.nodes.size(), 0.0f);
+    RotationPassStats stats;
+    if (bvh.root.is_leaf()) {
+        bvh.bounds = refit_leaf(mesh, bvh, bvh.root);
+        stats.sah = bvh.root.prim_count();
+        return stats;
+    }
     RotationPass pass(mesh, bvh, heights_, searched_areas_, settings);
-    const SubtreePass root = pass.run(bvh.root, 0);
+    const SubtreePass root = pass.run(bvh.root, 0, stats);
     bvh.bounds = root.bounds;
-    RotationPassStats stats = root.moves;
     const double root_area = root.bounds.half_area();
     stats.sah = root_area > 0.0 ? root.cost / root_area : 0.0;
     return stats;

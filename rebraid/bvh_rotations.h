@@ -73,11 +73,15 @@ struct RotationPassStats {
 ///   shrinks it most) is tried against every child of the other side;
 /// - pull-up: when N has a free slot, a grandchild moves up into it; G shrinks and nothing
 ///   grows, so the SAH never rises (binary trees have no free slots, so no such move there).
-/// A move's gain is bounded by how much G can shrink by losing one child, which prunes most of
-/// the search. The pass is deterministic (the decisions at N depend only on N's subtree) and
-/// keeps every triangle in exactly one leaf and the nesting within max_depth. Keeps per-node
-/// heights and searched areas between calls (no allocation after the first call on a tree of
-/// the same size).
+/// Two exact bounds prune the search (they skip only moves that could not beat the best so far,
+/// so the moves chosen are the same as without them): a move's gain is at most what G can
+/// shrink by losing one child; and what a box X turns G into when it replaces any one of G's
+/// children is at least G's "core" (the part every child-less-one box of G covers) plus X,
+/// which rules out at one box-area each the swaps and exchanges that would bring in a box from
+/// far away (most of them in a coherent tree). The pass is deterministic (the decisions at N depend
+/// only on N's subtree) and keeps every triangle in exactly one leaf and the nesting within
+/// max_depth. Keeps per-node heights and searched areas between calls (no allocation after the
+/// first call on a tree of the same size).
 class BvhRotator {
 public:
     /// Refits `bvh` to `mesh` (see refit_object_bvh) and rotates in the same pass.

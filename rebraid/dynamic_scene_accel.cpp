@@ -13,14 +13,23 @@
 namespace rebraid {
 
 std::string_view dynamic_top_name(DynamicTop top) {
-    return top == DynamicTop::two_level ? "twolevel" : "rebraid";
+    switch (top) {
+        case DynamicTop::two_level:
+            return "twolevel";
+        case DynamicTop::rebraid:
+            return "rebraid";
+        case DynamicTop::rebraid_incremental:
+            return "rebraid-incremental";
+    }
+    return "unknown";
 }
 
 DynamicTop parse_dynamic_top(std::string_view name) {
-    if (name == "twolevel") return DynamicTop::two_level;
-    if (name == "rebraid") return DynamicTop::rebraid;
+    for (DynamicTop top :
+         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
+        if (name == dynamic_top_name(top)) return top;
     throw Error("parse_dynamic_top: unknown top level '" + std::string(name) +
-                "' (valid: twolevel, rebraid)");
+                "' (valid: twolevel, rebraid, rebraid-incremental)");
 }
 
 DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
@@ -30,6 +39,7 @@ DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
     settings_.static_build.validate();
     settings_.two_level_top.validate();
     settings_.rebraid.validate();
+    settings_.incremental.validate();
     const BuildTimer timer;
     const Scene& world = scene.scene();
     updaters_.reserve(scene.dynamic_meshes().size());
@@ -47,6 +57,24 @@ DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
                                                                ? dynamic_build
                                                                : settings_.static_build);
     });
+    if (settings_.top == DynamicTop::rebraid_incremental) {
+        // Static: instances that neither move nor show a deforming mesh, whichever part of
+        // the composed scene they came from.
+        changing_instances_ = scene.changing_instances();
+        std::vector<InstanceId> static_instances;
+        static_instances.reserve(world.instances.size() - changing_instances_.size());
+        std::size_t next_changing = 0;
+        for (std::size_t i = 0; i < world.instances.size(); ++i) {
+            if (next_changing < changing_instances_.size() &&
+                changing_instances_[next_changing] == i) {
+                ++next_changing;
+                continue;
+            }
+            static_instances.push_back(InstanceId(i));
+        }
+        incremental_.emplace(settings_.rebraid, settings_.incremental);
+        incremental_->build_static(world, object_bvhs, static_instances);
+    }
     assemble(std::move(object_bvhs));
     build_ms_ = timer.elapsed_ms();
 }
@@ -54,6 +82,9 @@ DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
 void DynamicSceneAccel::assemble(std::vector<ObjectBvh> object_bvhs) {
     const Scene& world = scene_.scene();
     const BuildTimer timer;
+    // The last structure's object BVHs were moved out already; freeing its top level before
+    // the next is built lets the allocator hand the same (already mapped) memory back.
+    accel_.reset();
     AccelStats info;
     TopLevelBvh top;
     if (settings_.top == DynamicTop::rebraid) {
@@ -62,11 +93,17 @@ void DynamicSceneAccel::assemble(std::vector<ObjectBvh> object_bvhs) {
         info.brefs = build.brefs;
         info.budget = build.budget;
         info.opened = build.opened;
+    } else if (settings_.top == DynamicTop::rebraid_incremental) {
+        last_incremental_ = incremental_->build_frame(world, object_bvhs, changing_instances_);
+        top = std::move(last_incremental_.top);
+        last_incremental_.top = {};
+        info.brefs = last_incremental_.brefs;
+        info.budget = last_incremental_.budget;
+        info.opened = last_incremental_.opened;
     } else {
         top = build_two_level(world, object_bvhs, settings_.two_level_top);
     }
     info.top_build_ms = timer.elapsed_ms();
-    accel_.reset();  // its object BVHs were moved out already
     accel_.emplace(world, std::move(object_bvhs), std::move(top), info);
 }
 

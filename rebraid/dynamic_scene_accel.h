@@ -7,6 +7,7 @@
 
 #include "rebraid/build_settings.h"
 #include "rebraid/dynamic_scene.h"
+#include "rebraid/incremental_top_level.h"
 #include "rebraid/instanced_accel.h"
 #include "rebraid/object_bvh_update.h"
 #include "rebraid/rebraid_settings.h"
@@ -18,9 +19,12 @@ namespace rebraid {
 enum class DynamicTop {
     two_level,  ///< "twolevel": one top-level leaf per instance (two_level_builder.h)
     rebraid,    ///< "rebraid": the re-braided top (rebraid_builder.h)
+    /// "rebraid-incremental": the static instances' re-braided top built once, each frame
+    /// only the dynamic part re-braided and grafted on (incremental_top_level.h)
+    rebraid_incremental,
 };
 
-/// The command-line name: "twolevel" or "rebraid".
+/// The command-line name: "twolevel", "rebraid" or "rebraid-incremental".
 std::string_view dynamic_top_name(DynamicTop top);
 /// Inverse of dynamic_top_name(); throws rebraid::Error listing the valid names.
 DynamicTop parse_dynamic_top(std::string_view name);
@@ -34,8 +38,10 @@ struct DynamicSceneAccelSettings {
     BuildSettings static_build;
     /// The plain top (top = two_level).
     BuildSettings two_level_top = default_top_level_settings();
-    /// The re-braided top (top = rebraid).
+    /// The re-braided top (top = rebraid; top = rebraid_incremental for both its parts).
     RebraidSettings rebraid;
+    /// The incremental top's cut (top = rebraid_incremental).
+    IncrementalTopSettings incremental;
 };
 
 /// What one frame's update cost and gave.
@@ -48,7 +54,9 @@ struct DynamicFrameReport {
 /// A two-level structure over a DynamicScene that follows its animation: static object BVHs
 /// built once, dynamic ones updated by an ObjectBvhUpdater each, the top level rebuilt from
 /// scratch every frame over the same object BVHs (paper §6: the top is cheap to rebuild, so
-/// re-braiding every frame is affordable).
+/// re-braiding every frame is affordable). With top = rebraid_incremental, instances that
+/// neither move nor reference a deforming mesh form a static top built once, and each frame
+/// rebuilds only the part around the changing instances (IncrementalTopLevel).
 class DynamicSceneAccel {
 public:
     /// Builds every object BVH and the first top level. The dynamic scene must outlive this.
@@ -64,6 +72,13 @@ public:
     double build_ms() const { return build_ms_; }
     /// Reports of the dynamic meshes' last updates (index as DynamicScene::dynamic_meshes()).
     const std::vector<ObjectBvhUpdateReport>& last_updates() const { return last_updates_; }
+    /// The incremental top (top = rebraid_incremental), else null.
+    const IncrementalTopLevel* incremental_top() const {
+        return incremental_ ? &*incremental_ : nullptr;
+    }
+    /// What the last incremental frame's top build did (top = rebraid_incremental); its
+    /// `top` is empty, having moved into accel().
+    const IncrementalTopBuild& last_incremental_build() const { return last_incremental_; }
 
 private:
     /// Builds the top level over `object_bvhs` and assembles the structure.
@@ -74,6 +89,9 @@ private:
     std::vector<ObjectBvhUpdater> updaters_;  ///< index as dynamic_meshes()
     std::vector<ObjectBvhUpdateReport> last_updates_;
     std::optional<InstancedAccel> accel_;
+    std::optional<IncrementalTopLevel> incremental_;
+    std::vector<InstanceId> changing_instances_;  ///< the incremental top's dynamic part
+    IncrementalTopBuild last_incremental_;        ///< its top moved into accel_
     double build_ms_ = 0.0;
 };
 

@@ -13,9 +13,14 @@
 #include "rebraid/bref_budget.h"
 #include "rebraid/bref_opening.h"
 #include "rebraid/build_timer.h"
+#include "rebraid/bvh_stats.h"
 #include "rebraid/error.h"
+#include "rebraid/object_subtree_counts.h"
+#include "rebraid/overlap_opening.h"
 #include "rebraid/parallel_partition.h"
+#include "rebraid/rebraid_cost_guard.h"
 #include "rebraid/rebraid_termination.h"
+#include "rebraid/sah_aware_opening.h"
 #include "rebraid/wide_node_growth.h"
 
 namespace rebraid {
@@ -52,9 +57,7 @@ public:
                 segment.can_open = false;
             } else {
                 if (!info) info = compute_range_info(range(segment), threshold);
-                const OpeningCriterion criterion(info->bounds, settings_.open_threshold);
-                const std::uint32_t opened =
-                    open_brefs(segment, prims_, targets_, criterion, source_, threshold);
+                const std::uint32_t opened = open_segment(segment, info->bounds);
                 if (opened > 0) {
                     opened_ += opened;
                     info.reset();  // the BRefs changed
@@ -95,12 +98,12 @@ public:
         BRefSegment left{segment.start, mid, mid, segment.next_target, segment.can_open};
         BRefSegment right{mid, segment.end, segment.end, segment.next_target, segment.can_open};
         if (segment.can_open && segment.free_space() > 0) {
-            const std::uint32_t left_openable = count_openable(
-                prims_.subspan(segment.start, mid - segment.start), targets_,
-                OpeningCriterion(left_info.bounds, settings_.open_threshold), threshold);
-            const std::uint32_t right_openable = count_openable(
-                prims_.subspan(mid, segment.end - mid), targets_,
-                OpeningCriterion(right_info.bounds, settings_.open_threshold), threshold);
+            const std::uint32_t left_openable =
+                count_openable(prims_.subspan(segment.start, mid - segment.start), targets_,
+                               criterion_for(left_info.bounds), threshold);
+            const std::uint32_t right_openable =
+                count_openable(prims_.subspan(mid, segment.end - mid), targets_,
+                               criterion_for(right_info.bounds), threshold);
             std::tie(left, right) =
                 split_free_space(segment, mid, left_openable, right_openable, prims_);
         }
@@ -114,6 +117,29 @@ public:
     std::uint64_t opened() const { return opened_; }
 
 private:
+    OpeningCriterion criterion_for(const BBox3f& bounds) const {
+        return OpeningCriterion(bounds, settings_.open_threshold, settings_.open_leaves);
+    }
+
+    /// Step (2): opens the BRefs the settings' rule picks (§4.2, §5.3, or issue 10's
+    /// overlap and SAH-aware rules); returns how many.
+    std::uint32_t open_segment(BRefSegment& segment, const BBox3f& bounds) const {
+        const std::size_t threshold = settings_.build.parallel_threshold;
+        OpeningCriterion criterion = criterion_for(bounds);
+        std::vector<std::uint8_t> overlapping;
+        if (settings_.opening_rule == OpeningRule::overlap) {
+            overlapping =
+                select_overlapping(range(segment), targets_, bounds, settings_.overlap_threshold);
+            criterion.selected = overlapping;
+        }
+        if (settings_.opening_rule != OpeningRule::extent &&
+            !estimate_opening(range(segment), targets_, criterion, source_, segment.free_space(),
+                              settings_)
+                 .lowers_sah())
+            return 0;  // the subtree below may still open: its segments are smaller
+        return open_brefs(segment, prims_, targets_, criterion, source_, threshold);
+    }
+
     std::span<BuildPrim> range(const BRefSegment& s) const {
         return prims_.subspan(s.start, s.size());
     }
@@ -128,8 +154,9 @@ private:
 
 /// Leaves reference the BRef array with its unused free space in between; renumber them into
 /// a dense item list (in array order) and fill the top level's items.
+/// `item_slots` receives each item's target slot.
 void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
-                std::span<const BRefTarget> targets) {
+                std::span<const BRefTarget> targets, std::vector<std::uint32_t>& item_slots) {
     std::vector<std::uint32_t> dense(prims.size() + 1, 0);
     std::vector<char> used(prims.size(), 0);
     auto mark = [&](NodeRef ref) {
@@ -142,8 +169,10 @@ void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
     for (std::size_t i = 0; i < prims.size(); ++i) dense[i + 1] = dense[i] + used[i];
     top.items.resize(dense.back());
     top.item_bounds.resize(dense.back());
+    item_slots.resize(dense.back());
     for (std::size_t i = 0; i < prims.size(); ++i) {
         if (!used[i]) continue;
+        item_slots[dense[i]] = prims[i].id;
         top.items[dense[i]] = targets[prims[i].id];
         top.item_bounds[dense[i]] = prims[i].bounds;
     }
@@ -155,6 +184,17 @@ void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
         for (NodeRef& ref : node.children)
             if (ref.is_leaf()) ref = renumber(ref);
 }
+
+/// A build and, when tracked, its cost up to a constant of the instance set (see
+/// rebraid_cost_guard.h).
+struct TrackedBuild {
+    RebraidBuild build;
+    double cost = 0.0;
+};
+
+TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                const RebraidSettings& settings,
+                                std::span<const InstanceId> instances, bool is_tracking_cost);
 
 }  // namespace
 
@@ -169,6 +209,31 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
                            const RebraidSettings& settings, std::span<const InstanceId> instances) {
     settings.validate();
     const BuildTimer timer;
+    const bool is_guarded =
+        settings.opening_rule != OpeningRule::extent && settings.keep_cheaper_unopened;
+    TrackedBuild result = build_rebraid_once(scene, object_bvhs, settings, instances, is_guarded);
+    if (is_guarded && result.build.opened > 0) {
+        // The opening rules estimate; the guard measures: the same instances without any
+        // opening, kept when its exact cost is not higher.
+        RebraidSettings unopened = settings;
+        unopened.opening_rule = OpeningRule::extent;
+        unopened.budget_rule = BudgetRule::per_instance;
+        unopened.budget_factor = 0.0f;
+        TrackedBuild plain = build_rebraid_once(scene, object_bvhs, unopened, instances, true);
+        if (plain.cost <= result.cost) {
+            plain.build.budget = result.build.budget;
+            result = std::move(plain);
+        }
+    }
+    result.build.top.build_ms = timer.elapsed_ms();
+    return std::move(result.build);
+}
+
+namespace {
+
+TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                const RebraidSettings& settings,
+                                std::span<const InstanceId> instances, bool is_tracking_cost) {
     if (object_bvhs.size() != scene.meshes.size())
         throw Error("build_rebraid: " + std::to_string(object_bvhs.size()) + " object BVHs for " +
                     std::to_string(scene.meshes.size()) + " meshes");
@@ -200,6 +265,8 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
     const auto capacity = std::uint32_t(seed_count + result.budget);
     std::vector<BuildPrim> prims(capacity);
     std::vector<BRefTarget> targets(capacity);
+    std::vector<double> node_cost(is_tracking_cost ? capacity : 0);
+    std::vector<double> removed_cost(is_tracking_cost ? capacity : 0);
     std::uint32_t n = 0;
     for (const InstanceId i : instances) {
         const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
@@ -209,10 +276,19 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
             bref_world_bounds(bvh, bvh.root, bvh.bounds, object_to_world[i], settings.bounds_rule),
             n, bvh.prim_count()};
         targets[n] = {InstanceId(i), bvh.root};
+        if (is_tracking_cost)
+            node_cost[n] = mapped_box_half_area(bvh.bounds, object_to_world[i]) *
+                           (bvh.root.is_leaf() ? bvh.root.prim_count() : 1.0);
         ++n;
     }
 
-    const BRefSource source{object_bvhs, instance_mesh, object_to_world, settings.bounds_rule};
+    // The paper's rule estimates child counts (§5.3); the others use the real ones.
+    std::vector<std::vector<std::uint32_t>> subtree_prims;
+    if (settings.opening_rule != OpeningRule::extent)
+        subtree_prims = subtree_prim_counts(scene, object_bvhs, instances);
+    const BRefSource source{
+        object_bvhs,   instance_mesh,        object_to_world, settings.bounds_rule,
+        subtree_prims, settings.open_leaves, node_cost,       removed_cost};
     const RebraidPolicy policy(prims, targets, source, settings);
     const RebraidCandidate root = policy.prepare(BRefSegment{0, n, capacity, n, true}, false);
     TopLevelBvh& top = result.top;
@@ -221,12 +297,17 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
         top.root = root.is_leaf ? policy.make_leaf(root)
                                 : grow_wide_subtree(policy, root, 0,
                                                     settings.build.parallel_threshold, top.nodes);
-    emit_items(top, prims, targets);
+    std::vector<std::uint32_t> item_slots;
+    emit_items(top, prims, targets, item_slots);
     result.brefs = top.items.size();
     result.opened = policy.opened();
-    top.build_ms = timer.elapsed_ms();
-    return result;
+    TrackedBuild tracked{std::move(result), 0.0};
+    if (is_tracking_cost)
+        tracked.cost = cost_above_objects(tracked.build.top, item_slots, node_cost, removed_cost);
+    return tracked;
 }
+
+}  // namespace
 
 InstancedAccel build_rebraid_accel(const Scene& scene, const ObjectBvhBuilder& object_builder,
                                    const RebraidSettings& settings) {

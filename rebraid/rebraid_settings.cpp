@@ -25,6 +25,17 @@ void RebraidSettings::validate() const {
                     " must be at most " + std::to_string(NodeRef::kMaxFirst));
     check(std::isfinite(small_overlap_fraction) && small_overlap_fraction >= 0.0f,
           "small_overlap_fraction", small_overlap_fraction, "must be finite and >= 0");
+    check(std::isfinite(instance_entry_cost) && instance_entry_cost >= 0.0f, "instance_entry_cost",
+          instance_entry_cost, "must be finite and >= 0");
+    check(std::isfinite(overlap_threshold) && overlap_threshold >= 0.0f, "overlap_threshold",
+          overlap_threshold, "must be finite and >= 0");
+    if (estimate_levels > 8)
+        throw Error("RebraidSettings: estimate_levels " + std::to_string(estimate_levels) +
+                    " must be at most 8");
+    if (opening_rule != OpeningRule::extent && opening_rule != OpeningRule::sah &&
+        opening_rule != OpeningRule::overlap)
+        throw Error("RebraidSettings: opening_rule " + std::to_string(int(opening_rule)) +
+                    " is not an OpeningRule");
     build.validate();
 }
 

@@ -16,6 +16,20 @@ enum class BudgetRule {
     per_primitive,
 };
 
+/// Which BRefs a segment opens (paper §4.2 and issue 10's alternatives).
+enum class OpeningRule {
+    /// The paper's rule (§4.2): every inner-node BRef wider than `open_threshold` of the
+    /// segment's extent along its largest axis; child primitive counts are estimated as the
+    /// parent's divided by the number of children (§5.3).
+    extent,
+    /// The paper's candidates, opened only when the segment's estimated SAH falls
+    /// (sah_aware_opening.h); child primitive counts are the object BVH's real ones.
+    sah,
+    /// Candidates chosen by how much of their box overlaps BRefs of other instances
+    /// (overlap_opening.h), then the SAH test of `sah`.
+    overlap,
+};
+
 /// Parameters of the re-braiding top-level builder (Benthin et al. 2017). Defaults are the
 /// paper's values and the ones bench/RESULTS.md uses.
 struct RebraidSettings {
@@ -46,6 +60,30 @@ struct RebraidSettings {
     /// World-space boxes of BRefs of transformed instances: the paper's transformed node box
     /// (§5.4) or the tighter union of transformed children (bref_bounds.h).
     BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_box;
+    /// Which BRefs are opened (see OpeningRule).
+    OpeningRule opening_rule = OpeningRule::extent;
+    /// Also open BRefs to object-BVH leaves of several triangles, into one BRef per triangle
+    /// (a leaf reference of count 1), when they meet the opening rule. For scenes of many tiny
+    /// objects whose whole BVH is one leaf or a few.
+    bool open_leaves = false;
+    /// OpeningRule::sah and overlap: SAH cost of entering an instance through one more BRef
+    /// (transforming the ray), per unit of the BRef's area, relative to one node visit. The
+    /// SAH `rebraid stats` reports does not count it (0); a positive value makes opening more
+    /// reluctant where many small BRefs would each cost a transform.
+    float instance_entry_cost = 0.0f;
+    /// OpeningRule::sah and overlap: wide top-level node levels the SAH estimate builds (by
+    /// binned SAH, like the builder) over the BRefs with and without opening, before it
+    /// assumes the nodes further down are as large as their parent. More levels judge large
+    /// segments better and cost more build time.
+    std::uint32_t estimate_levels = 2;
+    /// OpeningRule::sah and overlap: when the build opened anything, also build the top
+    /// without opening and keep whichever has the lower exact SAH cost
+    /// (rebraid_cost_guard.h), so the rules never end above the unopened top. Costs one
+    /// plain top-level build.
+    bool keep_cheaper_unopened = true;
+    /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
+    /// cover at least this fraction of its box (estimated on a grid over the segment).
+    float overlap_threshold = 0.25f;
     /// Binning, SAH costs and the serial threshold of the top-level build (leaves hold one
     /// BRef: max_leaf_size is 1).
     BuildSettings build{.max_leaf_size = 1};

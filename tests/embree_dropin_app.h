@@ -11,9 +11,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <cstring>
 #include <limits>
-#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -250,53 +250,28 @@ inline Answers trace_accel(const EmbreeAccel& accel, const std::vector<Ray>& ray
         [&](RTCRay& ray) { accel.occluded1(ray); });
 }
 
-/// How far u and v may differ between two correct answers on a hit: 1e-4, or more where the
-/// barycentrics are ill-conditioned. Both sides compute them in the instance's object space
-/// from the ray mapped there, and the mapped origin carries rounding errors of a few ulps of
-/// its magnitude (Embree and the project invert and apply the transform with different
-/// operation orders). An origin error d moves u by up to |d| |dir| |edge| / |dot(Ng, dir)|:
-/// large for small triangles seen from far away.
-class BarycentricTolerance {
-public:
-    explicit BarycentricTolerance(const EmbreeAccel& accel) : converted_(accel.converted_scene()) {
-        for (std::size_t i = 0; i < converted_.instance_ids.size(); ++i)
-            instance_of_[{converted_.instance_ids[i].geom_id, converted_.instance_ids[i].inst_id}] =
-                InstanceId(i);
-    }
+/// The tolerance on barycentrics, and on Ng relative to its length.
+inline constexpr float kAttributeTolerance = 1e-4f;
 
-    float operator()(const RTCRayHit& rayhit) const {
-        const auto found = instance_of_.find({rayhit.hit.geomID, rayhit.hit.instID[0]});
-        if (found == instance_of_.end()) return 1e-4f;
-        const Instance& instance = converted_.scene.instances[found->second];
-        const AffineTransform to_object = instance.object_to_world.inverse();
-        const Vec3f org =
-            to_object.transform_point({rayhit.ray.org_x, rayhit.ray.org_y, rayhit.ray.org_z});
-        const Vec3f dir =
-            to_object.transform_vector({rayhit.ray.dir_x, rayhit.ray.dir_y, rayhit.ray.dir_z});
-        const auto corners = converted_.scene.meshes[instance.mesh_id].corners(rayhit.hit.primID);
-        const Vec3f normal = cross(corners[1] - corners[0], corners[2] - corners[0]);
-        const float longest_edge =
-            std::max({length(corners[1] - corners[0]), length(corners[2] - corners[0]),
-                      length(corners[2] - corners[1])});
-        const float magnitude = std::max({std::fabs(org.x), std::fabs(org.y), std::fabs(org.z),
-                                          length(instance.object_to_world.translation)});
-        const float origin_error = 16.0f * std::numeric_limits<float>::epsilon() * magnitude;
-        return 1e-4f + origin_error * length(dir) * longest_edge / std::fabs(dot(normal, dir));
-    }
-
-private:
-    const glue::ConvertedEmbreeScene& converted_;
-    std::map<std::pair<unsigned int, unsigned int>, InstanceId> instance_of_;
+/// How closely the attributes of hits with the same ids agreed.
+struct AttributeAgreement {
+    std::size_t compared = 0;       ///< hits with the same ids on both sides
+    std::size_t bit_identical = 0;  ///< of those, with t, u, v and Ng equal to the last bit
+    float max_uv_difference = 0.0f;
+    float max_relative_normal_difference = 0.0f;  ///< largest |Ng component difference| / |Ng|
 };
 
 /// Same hits as Embree: ids (unless two triangles are hit at the same t), t within the
-/// project's tolerance, u and v within 1e-4 (BarycentricTolerance), Ng within 1e-4 of its
-/// length, same occlusion; rare disagreements only where a ray grazes an edge.
-inline void expect_same_as_embree(const Answers& embree, const Answers& accel, const BBox3f& bounds,
-                                  const BarycentricTolerance& barycentric_tolerance) {
-    ASSERT_EQ(embree.hits.size(), accel.hits.size());
+/// project's tolerance, u and v within 1e-4, Ng within 1e-4 of its length, same occlusion;
+/// rare disagreements only where a ray grazes an edge. Returns how closely the attributes
+/// agreed.
+inline AttributeAgreement expect_same_as_embree(const Answers& embree, const Answers& accel,
+                                                const BBox3f& bounds) {
+    AttributeAgreement agreement;
+    EXPECT_EQ(embree.hits.size(), accel.hits.size());
+    if (embree.hits.size() != accel.hits.size()) return agreement;
     const test::Tolerance tolerance = test::tolerance_for(bounds);
-    std::size_t mismatches = 0, grazes = 0, hits = 0, compared_attributes = 0;
+    std::size_t mismatches = 0, grazes = 0, hits = 0;
     for (std::size_t i = 0; i < embree.hits.size(); ++i) {
         const RTCRayHit& e = embree.hits[i];
         const RTCRayHit& a = accel.hits[i];
@@ -322,16 +297,23 @@ inline void expect_same_as_embree(const Answers& embree, const Answers& accel, c
         }
         if (!is_hit(e)) continue;
         if (!same_ids(e, a)) continue;  // a tie at the same t: either triangle may win
-        ++compared_attributes;
+        ++agreement.compared;
+        agreement.bit_identical += e.ray.tfar == a.ray.tfar && e.hit.u == a.hit.u &&
+                                   e.hit.v == a.hit.v && e.hit.Ng_x == a.hit.Ng_x &&
+                                   e.hit.Ng_y == a.hit.Ng_y && e.hit.Ng_z == a.hit.Ng_z;
+        const float uv_difference =
+            std::max(std::fabs(e.hit.u - a.hit.u), std::fabs(e.hit.v - a.hit.v));
         const float ng_length =
             std::sqrt(e.hit.Ng_x * e.hit.Ng_x + e.hit.Ng_y * e.hit.Ng_y + e.hit.Ng_z * e.hit.Ng_z);
-        const float ng_tolerance = 1e-4f * ng_length;
-        const float uv_tolerance = barycentric_tolerance(e);
-        const bool same_attributes = std::fabs(e.hit.u - a.hit.u) <= uv_tolerance &&
-                                     std::fabs(e.hit.v - a.hit.v) <= uv_tolerance &&
-                                     std::fabs(e.hit.Ng_x - a.hit.Ng_x) <= ng_tolerance &&
-                                     std::fabs(e.hit.Ng_y - a.hit.Ng_y) <= ng_tolerance &&
-                                     std::fabs(e.hit.Ng_z - a.hit.Ng_z) <= ng_tolerance;
+        const float ng_difference =
+            std::max({std::fabs(e.hit.Ng_x - a.hit.Ng_x), std::fabs(e.hit.Ng_y - a.hit.Ng_y),
+                      std::fabs(e.hit.Ng_z - a.hit.Ng_z)}) /
+            ng_length;
+        agreement.max_uv_difference = std::max(agreement.max_uv_difference, uv_difference);
+        agreement.max_relative_normal_difference =
+            std::max(agreement.max_relative_normal_difference, ng_difference);
+        const bool same_attributes =
+            uv_difference <= kAttributeTolerance && ng_difference <= kAttributeTolerance;
         if (!same_attributes && ++mismatches <= 5)
             ADD_FAILURE() << "ray " << i << " (geom " << e.hit.geomID << " prim " << e.hit.primID
                           << "): Embree u,v=" << e.hit.u << "," << e.hit.v << " Ng=" << e.hit.Ng_x
@@ -343,16 +325,22 @@ inline void expect_same_as_embree(const Answers& embree, const Answers& accel, c
     EXPECT_LE(double(grazes), tolerance.max_graze_fraction * double(embree.hits.size()))
         << grazes << " rays disagree at grazed edges";
     EXPECT_GT(hits, embree.hits.size() / 50) << "too few rays hit the scene";
-    EXPECT_GT(compared_attributes, hits * 9 / 10) << "too few hits with identical ids";
+    EXPECT_GT(agreement.compared, hits * 9 / 10) << "too few hits with identical ids";
+    std::printf(
+        "[ attributes ] %zu hits compared, %zu bit-identical, max |du|,|dv| %.3g, "
+        "max |dNg|/|Ng| %.3g\n",
+        agreement.compared, agreement.bit_identical, double(agreement.max_uv_difference),
+        double(agreement.max_relative_normal_difference));
+    return agreement;
 }
 
 inline constexpr std::size_t kRayCount = 10000;
 
-inline void expect_accel_matches_embree(RTCScene scene, const EmbreeAccel& accel,
-                                        std::uint64_t seed) {
+inline AttributeAgreement expect_accel_matches_embree(RTCScene scene, const EmbreeAccel& accel,
+                                                      std::uint64_t seed) {
     const std::vector<Ray> rays = generate_random_rays(accel.bounds(), kRayCount, seed);
-    expect_same_as_embree(trace_embree(scene, rays), trace_accel(accel, rays), accel.bounds(),
-                          BarycentricTolerance(accel));
+    return expect_same_as_embree(trace_embree(scene, rays), trace_accel(accel, rays),
+                                 accel.bounds());
 }
 
 /// A single-triangle mesh for registry tests.

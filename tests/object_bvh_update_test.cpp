@@ -1,7 +1,7 @@
 // Updating the BVH of a deforming mesh: every strategy keeps a valid tree (each triangle in
-// one leaf, boxes containing their children, the same hits as a fresh build, the same
-// structure on any thread count); rotations never do worse than refit; restructuring repairs
-// a degraded tree; auto rebuilds past its factor.
+// one leaf, boxes containing their children, the same hits as Embree flat on the same frame,
+// the same structure on any thread count); rotations never do worse than refit;
+// restructuring repairs a degraded tree; auto refits, repairs and rebuilds by its factors.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
@@ -12,153 +12,29 @@
 #include <string>
 #include <vector>
 
-#include "hit_comparison.h"
+#include "object_bvh_checks.h"
 #include "reachability.h"
 #include "rebraid/bvh_stats.h"
 #include "rebraid/error.h"
-#include "rebraid/instanced_accel.h"
 #include "rebraid/mesh_generators.h"
 #include "rebraid/object_bvh_update.h"
-#include "rebraid/random.h"
-#include "rebraid/random_rays.h"
-#include "rebraid/structure_hash.h"
-#include "rebraid/two_level_builder.h"
 
 namespace rebraid {
 namespace {
 
-Mesh rest_mesh() {
-    return make_torus_knot({.path_segment_count = 192, .tube_segment_count = 10});
-}
-
-/// The rest mesh at animation time t: twisted about Y, then each vertex thrown along its own
-/// random direction by `explode` * t (incoherent motion, what degrades a refit tree).
-Mesh deformed(const Mesh& rest, float t, float explode = 0.6f) {
-    Mesh mesh = rest;
-    Random random(99);
-    for (Vec3f& p : mesh.positions) {
-        const float angle = 1.5f * t * p.y;
-        const float c = std::cos(angle), s = std::sin(angle);
-        p = {c * p.x + s * p.z, p.y, -s * p.x + c * p.z};
-        const Vec3f direction{random.next_float(-1, 1), random.next_float(-1, 1),
-                              random.next_float(-1, 1)};
-        p = p + direction * (explode * t);
-    }
-    return mesh;
-}
-
-/// The rest mesh with its own three corners per triangle (so triangles can move apart).
-Mesh unwelded(const Mesh& rest) {
-    Mesh mesh;
-    mesh.name = rest.name + " unwelded";
-    for (std::uint32_t prim = 0; prim < rest.triangles.size(); ++prim) {
-        const auto base = std::uint32_t(mesh.positions.size());
-        for (const Vec3f& corner : rest.corners(prim)) mesh.positions.push_back(corner);
-        mesh.triangles.push_back({base, base + 1, base + 2});
-    }
-    return mesh;
-}
-
-/// Each triangle of an unwelded mesh moved rigidly by `blend` of the way to another
-/// triangle's place: triangles stay small but their neighbours change, the worst case for
-/// a tree built on the rest pose.
-Mesh shuffled(const Mesh& unwelded_rest, float blend) {
-    Mesh mesh = unwelded_rest;
-    const auto count = std::uint32_t(mesh.triangles.size());
-    Random random(7);
-    std::vector<std::uint32_t> other(count);
-    for (std::uint32_t i = 0; i < count; ++i) other[i] = i;
-    for (std::uint32_t i = count; i > 1; --i) std::swap(other[i - 1], other[random.next_below(i)]);
-    const auto center = [&](std::uint32_t prim) {
-        const auto c = unwelded_rest.corners(prim);
-        return (c[0] + c[1] + c[2]) * (1.0f / 3.0f);
-    };
-    for (std::uint32_t prim = 0; prim < count; ++prim) {
-        const Vec3f offset = (center(other[prim]) - center(prim)) * blend;
-        for (std::uint32_t vertex : mesh.triangles[prim])
-            mesh.positions[vertex] = mesh.positions[vertex] + offset;
-    }
-    return mesh;
-}
-
-/// Checks the child boxes below `ref` contain their subtree; returns the subtree's depth.
-int check_subtree(const ObjectBvh& bvh, NodeRef ref, const BBox3f& box, std::vector<int>& reached,
-                  std::size_t& errors) {
-    if (ref.is_leaf()) {
-        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i) {
-            ++reached[bvh.prim_ids[i]];
-            BBox3f tri;
-            tri.extend(bvh.triangles[i].v0), tri.extend(bvh.triangles[i].v1);
-            tri.extend(bvh.triangles[i].v2);
-            if (!box.contains(tri) && ++errors <= 5)
-                ADD_FAILURE() << "leaf box misses triangle at leaf-order " << i;
-        }
-        return 0;
-    }
-    const WideNode& node = bvh.nodes[ref.node_id()];
-    if (!box.contains(node.bounds()) && ++errors <= 5)
-        ADD_FAILURE() << "node " << ref.node_id() << " is not inside its parent's box";
-    int depth = 0, count = node.child_count();
-    if (count < 1 && ++errors <= 5) ADD_FAILURE() << "node " << ref.node_id() << " is empty";
-    for (int slot = count; slot < kBvhWidth; ++slot)
-        if (!node.children[slot].is_empty() && ++errors <= 5)
-            ADD_FAILURE() << "node " << ref.node_id() << " has a used slot after a free one";
-    for (int slot = 0; slot < count; ++slot)
-        depth = std::max(depth, check_subtree(bvh, node.children[slot], node.child_bounds(slot),
-                                              reached, errors));
-    return depth + 1;
-}
-
-/// The tree is valid for `mesh`: each triangle in exactly one leaf, triangle copies equal to
-/// the mesh's, every box containing what is below it, nesting within kMaxBvhDepth.
-void expect_valid(const Mesh& mesh, const ObjectBvh& bvh) {
-    ASSERT_EQ(bvh.prim_ids.size(), mesh.triangles.size());
-    ASSERT_EQ(bvh.triangles.size(), mesh.triangles.size());
-    std::size_t errors = 0;
-    for (std::size_t i = 0; i < bvh.prim_ids.size(); ++i) {
-        const auto corners = mesh.corners(bvh.prim_ids[i]);
-        const TriangleVerts& copy = bvh.triangles[i];
-        if ((copy.v0 != corners[0] || copy.v1 != corners[1] || copy.v2 != corners[2]) &&
-            ++errors <= 5)
-            ADD_FAILURE() << "stale triangle copy at leaf-order " << i;
-    }
-    std::vector<int> reached(mesh.triangles.size(), 0);
-    const int depth = check_subtree(bvh, bvh.root, bvh.bounds, reached, errors);
-    EXPECT_LE(depth, kMaxBvhDepth);
-    for (std::size_t p = 0; p < reached.size(); ++p)
-        if (reached[p] != 1 && ++errors <= 5)
-            ADD_FAILURE() << "prim " << p << " reached " << reached[p] << " times";
-    EXPECT_EQ(errors, 0u);
-    EXPECT_EQ(bvh.bounds, mesh.bounds());
-}
-
-/// The updated tree answers 4000 random rays as a fresh two-level build of the same frame.
-void expect_hits_of_fresh_build(const Mesh& mesh, const ObjectBvh& bvh) {
-    Scene scene;
-    scene.meshes.push_back(mesh);
-    scene.instances.push_back({0, AffineTransform::identity()});
-    std::vector<ObjectBvh> bvhs{bvh};
-    TopLevelBvh top = build_two_level(scene, bvhs);
-    const InstancedAccel updated(scene, std::move(bvhs), std::move(top), AccelStats{});
-    const InstancedAccel fresh = build_two_level_accel(scene);
-    const std::vector<Ray> rays = generate_random_rays(mesh.bounds(), 4000, 5);
-    test::expect_same_answers(test::trace_all(fresh, rays), test::trace_all(updated, rays),
-                              test::tolerance_for(mesh.bounds()));
-}
+using test::check_subtree;
+using test::deformed;
+using test::expect_hits_of_embree_flat;
+using test::expect_valid;
+using test::rest_mesh;
+using test::shuffled;
+using test::structure_hash;
+using test::unwelded;
 
 ObjectBvhUpdateSettings with_strategy(UpdateStrategy strategy) {
     ObjectBvhUpdateSettings settings;
     settings.strategy = strategy;
     return settings;
-}
-
-std::uint64_t structure_hash(const ObjectBvh& bvh) {
-    StructureHash hash;
-    hash.add<WideNode>(bvh.nodes);
-    hash.add_value(bvh.root);
-    hash.add<PrimId>(bvh.prim_ids);
-    hash.add<TriangleVerts>(bvh.triangles);
-    return hash.value();
 }
 
 struct StrategyCase {
@@ -173,9 +49,7 @@ void PrintTo(const StrategyCase& strategy_case, std::ostream* out) {
 
 std::vector<StrategyCase> strategy_cases() {
     std::vector<StrategyCase> cases;
-    for (UpdateStrategy strategy :
-         {UpdateStrategy::rebuild, UpdateStrategy::refit, UpdateStrategy::rotate,
-          UpdateStrategy::restructure, UpdateStrategy::automatic}) {
+    for (UpdateStrategy strategy : kUpdateStrategies) {
         ObjectBvhUpdateSettings settings;
         settings.strategy = strategy;
         // Small subtrees qualify, so restructuring acts on this small mesh.
@@ -194,6 +68,18 @@ std::vector<StrategyCase> strategy_cases() {
             settings.rotation = {};
             settings.rotation.leaf_mode = RotationLeafMode::split_merge;
             cases.push_back({"rotate_split_merge", settings});
+            settings.rotation = {};
+        }
+        if (strategy == UpdateStrategy::automatic) {
+            // Every repair, each from the first frame on (the test's explosion passes 1.0
+            // at once), with a rebuild factor the explosion passes within the frames.
+            settings.repair_sah_factor = 1.0;
+            for (UpdateStrategy repair :
+                 {UpdateStrategy::rotate, UpdateStrategy::restructure, UpdateStrategy::treelet}) {
+                settings.auto_repair = repair;
+                cases.push_back(
+                    {"auto_repair_" + std::string(update_strategy_name(repair)), settings});
+            }
         }
     }
     return cases;
@@ -232,7 +118,7 @@ TEST_P(EveryStrategy, KeepsAValidTreeEveryFrame) {
 TEST_P(EveryStrategy, HitsEqualAFreshBuildAfterDeforming) {
     const Mesh rest = rest_mesh();
     const ObjectBvh bvh = animate(rest, GetParam().settings, 5);
-    expect_hits_of_fresh_build(deformed(rest, 1.0f), bvh);
+    expect_hits_of_embree_flat(deformed(rest, 1.0f), bvh);
 }
 
 TEST_P(EveryStrategy, SameStructureOnOneTwoAndEightThreads) {
@@ -328,7 +214,7 @@ TEST(SelectiveRestructurer, LowersTheSahOfABadlyDegradedTree) {
     EXPECT_GT(stats.subtrees_rebuilt, 0u);
     EXPECT_LE(stats.prims_rebuilt, mesh.triangles.size() / 2);
     EXPECT_LT(restructured_sah, 0.9 * refit_sah);
-    expect_hits_of_fresh_build(mesh, bvh);
+    expect_hits_of_embree_flat(mesh, bvh);
 }
 
 TEST(SelectiveRestructurer, NeverRaisesTheSah) {
@@ -365,7 +251,7 @@ TEST(SelectiveRestructurer, RebuildsScatteredPreSplitSubtreesAfterRotations) {
     expect_valid(mesh, bvh);
     test::for_each_leaf(bvh.nodes, bvh.root,
                         [&](NodeRef leaf) { EXPECT_EQ(leaf.prim_count(), 1u); });
-    expect_hits_of_fresh_build(mesh, bvh);
+    expect_hits_of_embree_flat(mesh, bvh);
 }
 
 TEST(ObjectBvhUpdater, AutoRebuildsOncePastTheFactor) {
@@ -375,12 +261,10 @@ TEST(ObjectBvhUpdater, AutoRebuildsOncePastTheFactor) {
     settings.rebuild_sah_factor = 1.3;
     ObjectBvh bvh = build_object_bvh(rest);
     ObjectBvhUpdater updater(settings);
-    // The first update of a tree that is not pre-split rebuilds it pre-split (auto rotates).
-    EXPECT_EQ(updater.update(rest, bvh).applied, UpdateStrategy::rebuild);
-    // Nothing moved: rotations suffice.
+    // Nothing moved: a refit is enough, and the tree given first is the reference.
     ObjectBvhUpdateReport report = updater.update(rest, bvh);
-    EXPECT_EQ(report.applied, UpdateStrategy::rotate);
-    EXPECT_LE(report.sah_over_rebuild, 1.0 + 1e-6);
+    EXPECT_EQ(report.applied, UpdateStrategy::refit);
+    EXPECT_NEAR(report.sah_over_rebuild, 1.0, 1e-6);
     // A shuffle passes any reasonable factor: rebuilt, and the new tree is the reference.
     const Mesh mesh = shuffled(rest, 1.0f);
     ObjectBvh refit_copy = bvh;
@@ -396,7 +280,7 @@ TEST(ObjectBvhUpdater, AutoStaysWithinTheFactorWithoutRebuilding) {
     for (double factor : {1.05, 1e9}) {
         ObjectBvhUpdateSettings settings;
         settings.strategy = UpdateStrategy::automatic;
-        settings.auto_rotates = false;  // refit only: its SAH grows with the explosion
+        settings.auto_repair = UpdateStrategy::refit;  // no repair: the SAH grows
         settings.rebuild_sah_factor = factor;
         std::vector<ObjectBvhUpdateReport> reports;
         animate(rest, settings, 8, &reports);
@@ -415,6 +299,59 @@ TEST(ObjectBvhUpdater, AutoStaysWithinTheFactorWithoutRebuilding) {
     }
 }
 
+TEST(ObjectBvhUpdater, AutoRepairsOnlyBetweenItsTwoFactors) {
+    const Mesh rest = rest_mesh();
+    for (UpdateStrategy repair :
+         {UpdateStrategy::treelet, UpdateStrategy::restructure, UpdateStrategy::rotate}) {
+        SCOPED_TRACE(std::string(update_strategy_name(repair)));
+        ObjectBvhUpdateSettings settings;
+        settings.strategy = UpdateStrategy::automatic;
+        settings.auto_repair = repair;
+        settings.repair_sah_factor = 1.02;
+        settings.rebuild_sah_factor = 1e9;
+        settings.restructure.min_subtree_prims = 16;
+        std::vector<ObjectBvhUpdateReport> reports;
+        animate(rest, settings, 12, &reports);
+        int repairs = 0;
+        double previous_ratio = 0.0;
+        for (std::size_t frame = 0; frame < reports.size(); ++frame) {
+            const ObjectBvhUpdateReport& report = reports[frame];
+            if (frame == 0 && repair == UpdateStrategy::rotate) {
+                // Rotations need one triangle per leaf: the first update rebuilds so.
+                EXPECT_EQ(report.applied, UpdateStrategy::rebuild);
+                previous_ratio = report.sah_over_rebuild;
+                continue;
+            }
+            EXPECT_NE(report.applied, UpdateStrategy::rebuild);
+            // Rotations are chosen by the previous frame's SAH (they replace the refit),
+            // the others by this frame's refit.
+            const double decided_by =
+                repair == UpdateStrategy::rotate ? previous_ratio : report.sah_over_rebuild;
+            if (report.applied == repair) {
+                ++repairs;
+                if (repair == UpdateStrategy::rotate) {
+                    EXPECT_GT(decided_by, 1.02);
+                }
+            } else {
+                EXPECT_EQ(report.applied, UpdateStrategy::refit);
+                EXPECT_LE(decided_by, 1.02);
+            }
+            previous_ratio = report.sah_over_rebuild;
+        }
+        EXPECT_GT(repairs, 0);
+    }
+}
+
+TEST(ObjectBvhUpdater, AutoBelowTheRepairFactorIsExactlyARefit) {
+    // Smooth motion within repair_sah_factor: auto must do what refit does, nothing more.
+    const Mesh rest = rest_mesh();
+    ObjectBvhUpdateSettings automatic = with_strategy(UpdateStrategy::automatic);
+    automatic.repair_sah_factor = 1e9 - 1;
+    automatic.rebuild_sah_factor = 1e9;
+    const ObjectBvh refit = animate(rest, with_strategy(UpdateStrategy::refit), 5);
+    EXPECT_EQ(structure_hash(animate(rest, automatic, 5)), structure_hash(refit));
+}
+
 TEST(ObjectBvhUpdater, RotatePreSplitRebuildsWithOneTrianglePerLeaf) {
     const Mesh rest = rest_mesh();
     ObjectBvh bvh = build_object_bvh(rest);
@@ -430,9 +367,7 @@ TEST(ObjectBvhUpdater, RotatePreSplitRebuildsWithOneTrianglePerLeaf) {
 }
 
 TEST(UpdateStrategy, NamesRoundTrip) {
-    for (UpdateStrategy strategy :
-         {UpdateStrategy::rebuild, UpdateStrategy::refit, UpdateStrategy::rotate,
-          UpdateStrategy::restructure, UpdateStrategy::automatic})
+    for (UpdateStrategy strategy : kUpdateStrategies)
         EXPECT_EQ(parse_update_strategy(update_strategy_name(strategy)), strategy);
     EXPECT_EQ(update_strategy_name(UpdateStrategy::automatic), "auto");
     EXPECT_THROW(parse_update_strategy("rotations"), Error);
@@ -447,6 +382,15 @@ TEST(ObjectBvhUpdater, RejectsBadSettingsAndAnotherMesh) {
     EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
     settings = {};
     settings.restructure.max_rebuilt_fraction = 2.0;
+    EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
+    settings = {};
+    settings.repair_sah_factor = 0.9;
+    EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
+    settings = {};
+    settings.auto_repair = UpdateStrategy::rebuild;
+    EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
+    settings = {};
+    settings.treelet.max_treelet_leaves = 1;
     EXPECT_THROW(ObjectBvhUpdater{settings}, Error);
     const Mesh rest = rest_mesh();
     ObjectBvh bvh = build_object_bvh(rest);

@@ -1,6 +1,8 @@
 #include "accel_factory.h"
 
 #include <array>
+#include <cmath>
+#include <string>
 
 #include "embree_glue/embree_bvh_builder.h"
 #include "embree_glue/embree_reference.h"
@@ -45,7 +47,116 @@ constexpr std::array kAccelTable{
 constexpr std::array kObjectBuilderKinds{ObjectBuilderKind::own, ObjectBuilderKind::embree_high,
                                          ObjectBuilderKind::embree_medium};
 
+constexpr std::array kOpeningRules{OpeningRule::extent, OpeningRule::sah, OpeningRule::overlap};
+
+/// The structure's own name: `spec` up to its first ':'.
+std::string_view base_name(std::string_view spec) {
+    return spec.substr(0, spec.find(':'));
+}
+
+const AccelEntry& find_entry(std::string_view name) {
+    for (const AccelEntry& entry : accel_entries())
+        if (entry.name == name) return entry;
+    throw Error("unknown accel '" + std::string(name) + "'; valid names: " + accel_names_joined());
+}
+
+/// One KEY=VALUE of a variant suffix applied to `options`.
+void apply_variant_setting(std::string_view spec, std::string_view key, std::string_view value,
+                           AccelOptions& options) {
+    const auto fail = [&](const std::string& why) -> void {
+        throw Error("accel '" + std::string(spec) + "': " + std::string(key) + "=" +
+                    std::string(value) + ": " + why);
+    };
+    const auto number = [&]() {
+        const std::string text(value);
+        std::size_t used = 0;
+        float parsed = 0.0f;
+        try {
+            parsed = std::stof(text, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != text.size() || text.empty() || !std::isfinite(parsed))
+            fail("not a finite number");
+        return parsed;
+    };
+    const auto one_of = [&](auto names, auto& field) {
+        for (const auto& [name, choice] : names)
+            if (name == value) {
+                field = choice;
+                return;
+            }
+        std::string valid;
+        for (const auto& [name, choice] : names)
+            valid += (valid.empty() ? "" : ", ") + std::string(name);
+        fail("valid values: " + valid);
+    };
+    RebraidSettings& rebraid = options.rebraid;
+    if (key == "object-builder") {
+        for (ObjectBuilderKind kind : object_builder_kinds())
+            if (object_builder_name(kind) == value) {
+                options.object_builder = kind;
+                return;
+            }
+        fail("not an object builder");
+    } else if (key == "open-threshold") {
+        rebraid.open_threshold = number();
+    } else if (key == "budget-factor") {
+        rebraid.budget_factor = number();
+    } else if (key == "primitives-per-bref") {
+        rebraid.primitives_per_bref = number();
+    } else if (key == "instance-entry-cost") {
+        rebraid.instance_entry_cost = number();
+    } else if (key == "estimate-levels") {
+        const float levels = number();
+        if (levels < 0.0f || levels > 8.0f || levels != std::floor(levels))
+            fail("not a whole number in [0, 8]");
+        rebraid.estimate_levels = std::uint32_t(levels);
+    } else if (key == "overlap-threshold") {
+        rebraid.overlap_threshold = number();
+    } else if (key == "budget-rule") {
+        one_of(std::array{std::pair{std::string_view("instances"), BudgetRule::per_instance},
+                          std::pair{std::string_view("primitives"), BudgetRule::per_primitive}},
+               rebraid.budget_rule);
+    } else if (key == "bref-bounds") {
+        one_of(std::array{std::pair{std::string_view("box"), BRefBoundsRule::transformed_box},
+                          std::pair{std::string_view("children"),
+                                    BRefBoundsRule::transformed_children}},
+               rebraid.bounds_rule);
+    } else if (key == "opening") {
+        std::array<std::pair<std::string_view, OpeningRule>, kOpeningRules.size()> names;
+        for (std::size_t i = 0; i < names.size(); ++i)
+            names[i] = {opening_rule_name(kOpeningRules[i]), kOpeningRules[i]};
+        one_of(names, rebraid.opening_rule);
+    } else if (key == "open-leaves") {
+        one_of(std::array{std::pair{std::string_view("1"), true},
+                          std::pair{std::string_view("0"), false},
+                          std::pair{std::string_view("true"), true},
+                          std::pair{std::string_view("false"), false}},
+               rebraid.open_leaves);
+    } else {
+        throw Error("accel '" + std::string(spec) + "': unknown setting '" + std::string(key) +
+                    "'; valid keys: " + std::string(kAccelVariantKeys));
+    }
+}
+
 }  // namespace
+
+std::string_view opening_rule_name(OpeningRule rule) {
+    switch (rule) {
+        case OpeningRule::extent:
+            return "extent";
+        case OpeningRule::sah:
+            return "sah";
+        case OpeningRule::overlap:
+            return "overlap";
+    }
+    return "unknown";
+}
+
+std::span<const OpeningRule> opening_rules() {
+    return kOpeningRules;
+}
 
 std::string_view object_builder_name(ObjectBuilderKind kind) {
     switch (kind) {
@@ -98,16 +209,34 @@ std::string accel_names_joined() {
     return joined;
 }
 
-const AccelEntry& find_accel(std::string_view name) {
-    for (const AccelEntry& entry : accel_entries())
-        if (entry.name == name) return entry;
-    throw Error("unknown accel '" + std::string(name) + "'; valid names: " + accel_names_joined());
+AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base) {
+    AccelVariant variant{&find_entry(base_name(spec)), base, std::string(spec)};
+    std::size_t start = spec.find(':');
+    while (start != std::string_view::npos) {
+        const std::size_t end = spec.find(':', start + 1);
+        const std::string_view setting = spec.substr(
+            start + 1, end == std::string_view::npos ? std::string_view::npos : end - start - 1);
+        const std::size_t equals = setting.find('=');
+        if (equals == std::string_view::npos)
+            throw Error("accel '" + std::string(spec) + "': setting '" + std::string(setting) +
+                        "' is not KEY=VALUE");
+        apply_variant_setting(spec, setting.substr(0, equals), setting.substr(equals + 1),
+                              variant.options);
+        start = end;
+    }
+    variant.options.rebraid.validate();
+    return variant;
 }
 
-std::unique_ptr<Accel> build_accel(std::string_view name, const Scene& scene,
+const AccelEntry& find_accel(std::string_view spec) {
+    return *parse_accel_variant(spec).entry;
+}
+
+std::unique_ptr<Accel> build_accel(std::string_view spec, const Scene& scene,
                                    const AccelOptions& options) {
     options.rebraid.validate();
-    return find_accel(name).build(scene, options);
+    const AccelVariant variant = parse_accel_variant(spec, options);
+    return variant.entry->build(scene, variant.options);
 }
 
 }  // namespace rebraid::cli

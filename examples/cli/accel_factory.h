@@ -33,6 +33,12 @@ struct AccelOptions {
     RebraidSettings rebraid;
 };
 
+/// The `--opening` name of `rule` ("extent", "sah", "overlap").
+std::string_view opening_rule_name(OpeningRule rule);
+
+/// Every OpeningRule, in the order `--help` lists them.
+std::span<const OpeningRule> opening_rules();
+
 /// The `--object-builder` name of `kind` ("own", "embree-high", "embree-medium").
 std::string_view object_builder_name(ObjectBuilderKind kind);
 
@@ -60,13 +66,33 @@ std::vector<std::string> accel_names();
 /// The valid names joined with ", " (for help texts and error messages).
 std::string accel_names_joined();
 
-/// The entry called `name`; throws rebraid::Error listing the valid names when there is none.
-/// Commands call this before loading a scene, so a typo fails fast.
-const AccelEntry& find_accel(std::string_view name);
+/// A structure with settings of its own: `--accel` accepts `NAME[:KEY=VALUE]...`, so that one
+/// run can compare variants, e.g. `rebraid:opening=sah:bref-bounds=children`. Keys are the
+/// build options' long names without dashes in front (kAccelVariantKeys); each overrides the
+/// command line's value for this structure only.
+struct AccelVariant {
+    const AccelEntry* entry = nullptr;
+    AccelOptions options;
+    std::string label;  ///< the whole `NAME[:KEY=VALUE]...` text, naming it in outputs
+};
 
-/// Builds the structure called `name` over `scene` with `options` (validated first). The
-/// scene must outlive the result.
-std::unique_ptr<Accel> build_accel(std::string_view name, const Scene& scene,
+/// The keys a variant suffix accepts, for help texts.
+inline constexpr std::string_view kAccelVariantKeys =
+    "object-builder, open-threshold, budget-factor, budget-rule, primitives-per-bref, "
+    "bref-bounds, opening, open-leaves, instance-entry-cost, estimate-levels, overlap-threshold";
+
+/// Parses `spec` (`NAME[:KEY=VALUE]...`) on top of `base`; throws rebraid::Error naming the
+/// spec and the bad name, key or value. The settings are validated.
+AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base = {});
+
+/// The entry of the structure `spec` names (a variant suffix is parsed and checked too);
+/// throws rebraid::Error listing the valid names when there is none. Commands call this
+/// before loading a scene, so a typo fails fast.
+const AccelEntry& find_accel(std::string_view spec);
+
+/// Builds the structure `spec` names over `scene` with `options`, overridden by the spec's
+/// variant suffix (validated first). The scene must outlive the result.
+std::unique_ptr<Accel> build_accel(std::string_view spec, const Scene& scene,
                                    const AccelOptions& options = {});
 
 }  // namespace rebraid::cli

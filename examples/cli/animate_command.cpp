@@ -38,6 +38,8 @@ struct AnimateOptions {
     float time_step = 1.0f / 30.0f;
     std::vector<std::string> update_names;  ///< empty: every strategy
     std::vector<std::string> top_names;     ///< empty: twolevel and rebraid
+    float budget_factor = RebraidSettings{}.budget_factor;
+    std::uint32_t max_cut_pieces = IncrementalTopSettings{}.max_cut_pieces;
     bool has_embree = true;
     int width = 640;
     int height = 360;
@@ -143,6 +145,8 @@ void run_animate(const AnimateOptions& options) {
                                              .size_fraction = options.size_fraction,
                                              .seed = options.seed};
     placement.validate();
+    RebraidSettings{.budget_factor = options.budget_factor}.validate();
+    IncrementalTopSettings{.max_cut_pieces = options.max_cut_pieces}.validate();
     if (!(options.time_step >= 0.0f) || !std::isfinite(options.time_step))
         throw Error("--time-step " + std::to_string(options.time_step) + " must be >= 0");
 
@@ -169,6 +173,8 @@ void run_animate(const AnimateOptions& options) {
             DynamicSceneAccelSettings settings;
             settings.top = top;
             settings.update.strategy = strategy;
+            settings.rebraid.budget_factor = options.budget_factor;
+            settings.incremental.max_cut_pieces = options.max_cut_pieces;
             methods.push_back(std::make_unique<OwnMethod>(dynamic, settings));
         }
 
@@ -254,7 +260,8 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         "animate",
         "Dynamic-in-static frame benchmark: copies of an animated glTF in a static scene; per "
         "frame, pose them, update every method's structure (Embree flat, flat with refit, "
-        "instanced; twolevel and rebraid tops with each object-BVH update strategy) and "
+        "instanced; twolevel and rebraid tops, and rebraid-incremental on request, with each "
+        "object-BVH update strategy) and "
         "render primary rays plus one diffuse bounce through it, all on the same rays.");
     command
         ->add_option("--static", options->static_path,
@@ -284,9 +291,24 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         ->type_name("STRATEGY");
     command
         ->add_option("--top", options->top_names,
-                     "top levels, comma-separated: twolevel, rebraid (default: both)")
+                     "top levels, comma-separated: twolevel, rebraid, rebraid-incremental (the "
+                     "static instances' re-braided top built once, only the part around the "
+                     "dynamic ones rebuilt per frame) (default: twolevel and rebraid)")
         ->delimiter(',')
         ->type_name("TOP");
+    command
+        ->add_option("--budget-factor", options->budget_factor,
+                     "extra BRefs per instance of the re-braided tops (paper: 4)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str()
+        ->type_name("F");
+    command
+        ->add_option("--max-cut", options->max_cut_pieces,
+                     "rebraid-incremental: most pieces of the static top each frame's upper "
+                     "build takes")
+        ->check(CLI::Range(std::uint32_t(1), NodeRef::kMaxFirst))
+        ->capture_default_str()
+        ->type_name("N");
     command->add_flag("!--no-embree", options->has_embree, "leave out the Embree methods");
     command->add_option("--width", options->width, "image width of the rendered frame")
         ->check(CLI::Range(1, 32768))

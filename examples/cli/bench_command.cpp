@@ -73,7 +73,7 @@ TraceTiming time_closest_hits(const Accel& accel, const std::vector<Ray>& rays, 
 /// What one structure measured on one scene.
 struct BenchResult {
     std::string scene;
-    const AccelEntry* entry = nullptr;
+    const AccelVariant* variant = nullptr;
     AccelStats stats;
     TraceTiming primary, diffuse;
 };
@@ -86,9 +86,10 @@ nlohmann::ordered_json result_to_json(const BenchResult& result, const BenchRays
                                       const BenchOptions& options) {
     nlohmann::ordered_json json;
     json["scene"] = result.scene;
-    json["accel"] = result.entry->name;
-    if (result.entry->has_object_bvhs)
-        json["object_builder"] = object_builder_name(options.accel_options.object_builder);
+    // The whole NAME[:KEY=VALUE...] text: variants of one structure stay apart.
+    json["accel"] = result.variant->label;
+    if (result.variant->entry->has_object_bvhs)
+        json["object_builder"] = object_builder_name(result.variant->options.object_builder);
     json.update(stats_to_json(result.stats));
     if (!result.stats.sah) json["sah"] = nullptr;  // Embree's own BVHs are not inspectable
     json["mrays_primary"] = result.primary.mrays_per_second;
@@ -103,7 +104,7 @@ nlohmann::ordered_json result_to_json(const BenchResult& result, const BenchRays
 }
 
 void print_scene_header(const std::string& scene_name, const Scene& scene, const BenchRays& rays,
-                        const BenchOptions& options) {
+                        const BenchOptions& options, int name_width) {
     std::printf(
         "%s: %llu triangles, %zu instances, %zu meshes; %zu primary rays (%dx%d, %zu hit) and "
         "%zu diffuse rays; %zu threads; Mrays/s from the median of %d runs after 1 warm-up\n",
@@ -111,16 +112,21 @@ void print_scene_header(const std::string& scene_name, const Scene& scene, const
         scene.instances.size(), scene.meshes.size(), rays.primary.size(), rays.image_width,
         rays.image_height, rays.primary_hit_count, rays.diffuse.size(), active_thread_count(),
         options.repetitions);
-    std::printf("  %-18s %10s %10s %8s %10s %10s %10s %10s\n", "accel", "build_ms", "top_ms", "sah",
-                "nodes", "memory_MB", "Mrays_pri", "Mrays_dif");
+    std::printf("  %-*s %10s %10s %8s %10s %10s %10s %10s\n", name_width, "accel", "build_ms",
+                "top_ms", "sah", "nodes", "memory_MB", "Mrays_pri", "Mrays_dif");
 }
 
-void print_result_row(const BenchResult& result, const BenchOptions& options) {
+/// The name a table row shows: the variant's label, plus the object builder when not ours.
+std::string row_name(const AccelVariant& variant) {
+    std::string name = variant.label;
+    if (variant.entry->has_object_bvhs && variant.options.object_builder != ObjectBuilderKind::own)
+        name += "/" + std::string(object_builder_name(variant.options.object_builder));
+    return name;
+}
+
+void print_result_row(const BenchResult& result, int name_width) {
     const AccelStats& stats = result.stats;
-    std::string name(result.entry->name);
-    if (result.entry->has_object_bvhs &&
-        options.accel_options.object_builder != ObjectBuilderKind::own)
-        name += "/" + std::string(object_builder_name(options.accel_options.object_builder));
+    const std::string name = row_name(*result.variant);
     const auto optional_number = [](auto value, const char* format) {
         if (!value) return std::string("-");
         char text[32];
@@ -129,8 +135,8 @@ void print_result_row(const BenchResult& result, const BenchOptions& options) {
     };
     std::optional<double> memory_mb;
     if (stats.memory_bytes) memory_mb = static_cast<double>(*stats.memory_bytes) / (1 << 20);
-    std::printf("  %-18s %10.1f %10s %8s %10s %10s %10.2f %10.2f\n", name.c_str(), stats.build_ms,
-                optional_number(stats.top_build_ms, "%.1f").c_str(),
+    std::printf("  %-*s %10.1f %10s %8s %10s %10s %10.2f %10.2f\n", name_width, name.c_str(),
+                stats.build_ms, optional_number(stats.top_build_ms, "%.1f").c_str(),
                 optional_number(stats.sah, "%.2f").c_str(),
                 optional_number(stats.nodes, "%.0f").c_str(),
                 optional_number(memory_mb, "%.1f").c_str(), result.primary.mrays_per_second,
@@ -140,9 +146,13 @@ void print_result_row(const BenchResult& result, const BenchOptions& options) {
 
 void run_bench(const BenchOptions& options) {
     // Check every name and setting before the first (slow) scene load.
-    std::vector<const AccelEntry*> entries;
-    for (const std::string& name : options.accel_names) entries.push_back(&find_accel(name));
     options.accel_options.rebraid.validate();
+    std::vector<AccelVariant> variants;
+    int name_width = 18;
+    for (const std::string& name : options.accel_names) {
+        variants.push_back(parse_accel_variant(name, options.accel_options));
+        name_width = std::max(name_width, int(row_name(variants.back()).size()));
+    }
 
     std::vector<std::string> scene_paths = options.scene_paths;
     if (scene_paths.empty()) scene_paths.emplace_back();
@@ -159,12 +169,11 @@ void run_bench(const BenchOptions& options) {
             const glue::EmbreeInstancedAccel reference(scene);
             rays = make_bench_rays(scene, reference, options.rays);
         }
-        if (!options.is_json) print_scene_header(scene_name, scene, rays, options);
-        for (const AccelEntry* entry : entries) {
-            BenchResult result{scene_name, entry, {}, {}, {}};
+        if (!options.is_json) print_scene_header(scene_name, scene, rays, options, name_width);
+        for (const AccelVariant& variant : variants) {
+            BenchResult result{scene_name, &variant, {}, {}, {}};
             {
-                const std::unique_ptr<Accel> accel =
-                    build_accel(entry->name, scene, options.accel_options);
+                const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);
                 result.stats = accel->stats();
                 result.primary = time_closest_hits(*accel, rays.primary, options.repetitions);
                 result.diffuse = time_closest_hits(*accel, rays.diffuse, options.repetitions);
@@ -172,7 +181,7 @@ void run_bench(const BenchOptions& options) {
             if (options.is_json)
                 all_results.push_back(result_to_json(result, rays, options));
             else
-                print_result_row(result, options);
+                print_result_row(result, name_width);
         }
     }
     if (options.is_json) std::cout << all_results.dump(2) << "\n";
@@ -197,7 +206,11 @@ void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& acti
     command
         ->add_option("--accel", options->accel_names,
                      "comma-separated structures, from: " + accel_names_joined() + " (default " +
-                         default_accels + ")")
+                         default_accels +
+                         "); NAME:KEY=VALUE[:KEY=VALUE...] is a variant with its own build "
+                         "options, named so in the output, e.g. "
+                         "twolevel,rebraid,rebraid:opening=sah:bref-bounds=children; keys: " +
+                         std::string(kAccelVariantKeys))
         ->delimiter(',')
         ->type_name("LIST");
     command

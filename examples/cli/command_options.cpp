@@ -20,7 +20,10 @@ void add_accel_option(CLI::App& command, std::string& accel_name) {
     command
         .add_option("--accel", accel_name,
                     "acceleration structure: " + accel_names_joined() + " (default " +
-                        std::string(kDefaultAccelName) + ")")
+                        std::string(kDefaultAccelName) +
+                        "); NAME:KEY=VALUE[:KEY=VALUE...] overrides build options for it, "
+                        "keys: " +
+                        std::string(kAccelVariantKeys))
         ->type_name("NAME");
 }
 
@@ -56,8 +59,8 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str()
         ->type_name("B");
-    const std::map<std::string, BudgetRule> budget_rules{
-        {"instances", BudgetRule::per_instance}, {"primitives", BudgetRule::per_primitive}};
+    const std::map<std::string, BudgetRule> budget_rules{{"instances", BudgetRule::per_instance},
+                                                         {"primitives", BudgetRule::per_primitive}};
     command
         .add_option("--budget-rule", options.rebraid.budget_rule,
                     "rebraid: size the BRef budget by instances (--budget-factor x instances, "
@@ -84,6 +87,42 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         ->default_str(options.rebraid.bounds_rule == BRefBoundsRule::transformed_box ? "box"
                                                                                      : "children")
         ->type_name("RULE");
+    std::map<std::string, OpeningRule> opening_names;
+    for (OpeningRule rule : opening_rules())
+        opening_names.emplace(std::string(opening_rule_name(rule)), rule);
+    command
+        .add_option("--opening", options.rebraid.opening_rule,
+                    "rebraid: which BRefs open: extent (the paper's rule, 4.2), sah (the "
+                    "paper's candidates, opened only where the estimated SAH falls, with real "
+                    "child primitive counts) or overlap (candidates overlapping other "
+                    "instances' BRefs by --overlap-threshold, then the SAH test)")
+        ->transform(CLI::CheckedTransformer(opening_names, CLI::ignore_case))
+        ->default_str(std::string(opening_rule_name(options.rebraid.opening_rule)))
+        ->type_name("RULE");
+    command.add_flag("--open-leaves", options.rebraid.open_leaves,
+                     "rebraid: also open BRefs to object leaves of several triangles into one "
+                     "BRef per triangle");
+    command
+        .add_option("--instance-entry-cost", options.rebraid.instance_entry_cost,
+                    "rebraid, --opening sah|overlap: SAH cost of one more instance entry (ray "
+                    "transform) per unit of BRef area, relative to a node visit")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str()
+        ->type_name("C");
+    command
+        .add_option("--estimate-levels", options.rebraid.estimate_levels,
+                    "rebraid, --opening sah|overlap: wide top-level levels the SAH estimate "
+                    "builds before assuming lower nodes as large as their parent")
+        ->check(CLI::Range(0, 8))
+        ->capture_default_str()
+        ->type_name("L");
+    command
+        .add_option("--overlap-threshold", options.rebraid.overlap_threshold,
+                    "rebraid, --opening overlap: least fraction of a BRef's box shared with "
+                    "other instances' BRefs for it to be a candidate")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str()
+        ->type_name("F");
 }
 
 }  // namespace rebraid::cli
