@@ -8,6 +8,7 @@
 
 #include "rebraid/build_timer.h"
 #include "rebraid/error.h"
+#include "rebraid/object_subtree_counts.h"
 #include "rebraid/wide_bvh_builder.h"
 
 namespace rebraid {
@@ -46,7 +47,7 @@ std::vector<BuildPrim> make_upper_prims(const StaticTopCut& cut, const StaticTop
         if (item.object_node.is_inner() && item.object_node != bvh.root) {
             auto found = mesh_counts.find(mesh_id);
             if (found == mesh_counts.end())
-                found = mesh_counts.emplace(mesh_id, object_node_prim_counts(bvh)).first;
+                found = mesh_counts.emplace(mesh_id, subtree_prim_counts(bvh)).first;
             counts = found->second;
         }
         prims.push_back({dynamic_top.item_bounds[i], std::uint32_t(prims.size()),

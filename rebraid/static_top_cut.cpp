@@ -5,18 +5,10 @@
 #include <unordered_map>
 
 #include "rebraid/error.h"
+#include "rebraid/object_subtree_counts.h"
 
 namespace rebraid {
 namespace {
-
-std::uint32_t count_below(const ObjectBvh& bvh, NodeRef ref, std::vector<std::uint32_t>& counts) {
-    if (ref.is_empty()) return 0;
-    if (ref.is_leaf()) return ref.prim_count();
-    std::uint32_t sum = 0;
-    for (NodeRef child : bvh.nodes[ref.node_id()].children) sum += count_below(bvh, child, counts);
-    counts[ref.node_id()] = sum;
-    return sum;
-}
 
 std::uint32_t height_below(const TopLevelBvh& top, NodeRef ref,
                            std::vector<std::uint32_t>& heights) {
@@ -61,12 +53,6 @@ bool overlaps_some_leaf(const TopLevelBvh& tree, const BBox3f& box) {
 
 }  // namespace
 
-std::vector<std::uint32_t> object_node_prim_counts(const ObjectBvh& bvh) {
-    std::vector<std::uint32_t> counts(bvh.nodes.size(), 0);
-    count_below(bvh, bvh.root, counts);
-    return counts;
-}
-
 std::uint32_t object_ref_prim_count(const ObjectBvh& bvh, NodeRef ref,
                                     std::span<const std::uint32_t> node_prims) {
     if (ref.is_empty()) return 0;
@@ -104,7 +90,7 @@ StaticTopSummary summarize_static_top(const TopLevelBvh& top, const Scene& scene
         if (item.object_node.is_inner() && item.object_node != bvh.root) {
             auto found = mesh_counts.find(mesh_id);
             if (found == mesh_counts.end())
-                found = mesh_counts.emplace(mesh_id, object_node_prim_counts(bvh)).first;
+                found = mesh_counts.emplace(mesh_id, subtree_prim_counts(bvh)).first;
             counts = found->second;
         }
         summary.item_prims[i] = object_ref_prim_count(bvh, item.object_node, counts);

@@ -12,9 +12,6 @@
 
 namespace rebraid {
 
-/// Triangles below every node of `bvh` (index = node id), counted once by a post-order walk.
-std::vector<std::uint32_t> object_node_prim_counts(const ObjectBvh& bvh);
-
 /// Triangles below one object-BVH reference, given the counts of its BVH's nodes (an empty
 /// `node_prims` is allowed when `ref` is the root or a leaf).
 std::uint32_t object_ref_prim_count(const ObjectBvh& bvh, NodeRef ref,
