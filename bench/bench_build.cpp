@@ -1,21 +1,29 @@
 // Build-speed micro-benchmark: the project's own binned-SAH wide-BVH builder against Embree's
 // own scene build (rtcCommitScene, medium quality) on the same world-space triangles, at 1 and
-// 2 threads. Reports Mprims/s (and, for the own builder, the tree's SAH).
+// 2 threads. Reports Mprims/s (and, for the own builder, the tree's SAH). Also the top-level
+// builds alone (object BVHs built once beforehand): the plain two-level top, the re-braided
+// top under the paper's rule and under the SAH-aware rule (issue 5's "top build <= 2x
+// twolevel"), reporting the top's items and the time per item.
 //
-// Usage: bench_build [--scene-dir=DIR] [Google Benchmark flags, e.g.
+// Usage: bench_build [--scene-dir=DIR] [--top-scene=FILE ...] [Google Benchmark flags, e.g.
 //        --benchmark_filter=Own --benchmark_repetitions=3]
 // DIR holds the shared .glb scenes; without the flag, $REBRAID_SHARED_SCENES, then
-// <repo>/../shared/scenes (from this file's path), then ../shared/scenes.
+// <repo>/../shared/scenes (from this file's path), then ../shared/scenes. Each --top-scene
+// adds a scene file (e.g. a generated one) to the top-level benchmarks, which otherwise run
+// on the default scene and cg57_cruiser.
 
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -27,7 +35,10 @@
 #include "rebraid/default_scene.h"
 #include "rebraid/gltf_scene.h"
 #include "rebraid/object_bvh.h"
+#include "rebraid/object_bvh_set.h"
+#include "rebraid/rebraid_builder.h"
 #include "rebraid/scene.h"
+#include "rebraid/two_level_builder.h"
 #include "rebraid/wide_bvh_builder.h"
 
 namespace {
@@ -170,6 +181,108 @@ void embree_scene_build(benchmark::State& state, const std::string& scene) {
     set_mprims_counter(state, mesh->triangles.size());
 }
 
+/// A scene with its object BVHs, for the top-level benchmarks.
+struct SceneWithObjects {
+    rebraid::Scene scene;
+    std::vector<rebraid::ObjectBvh> object_bvhs;
+};
+
+/// Scenes by name ("default", a shared scene's file name, or a path), loaded and their object
+/// BVHs built on first use.
+const SceneWithObjects& scene_with_objects(const std::string& name) {
+    static std::map<std::string, SceneWithObjects> cache;
+    auto it = cache.find(name);
+    if (it != cache.end()) return it->second;
+    SceneWithObjects loaded;
+    if (name == "default")
+        loaded.scene = rebraid::make_default_scene();
+    else
+        loaded.scene = rebraid::load_gltf_scene(
+            name.find('/') == std::string::npos ? g_scene_dir + "/" + name : name);
+    loaded.object_bvhs =
+        rebraid::build_object_bvhs(loaded.scene, rebraid::own_object_bvh_builder());
+    return cache.emplace(name, std::move(loaded)).first->second;
+}
+
+double process_cpu_seconds() {
+    timespec now{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+    return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
+}
+
+/// Which top level a benchmark builds.
+enum class TopKind { two_level, rebraid_paper, rebraid_sah };
+
+/// One top-level build per iteration (manual time: the build call alone).
+void top_build(benchmark::State& state, const std::string& scene, TopKind kind) {
+    const SceneWithObjects* input = nullptr;
+    try {
+        input = &scene_with_objects(scene);
+    } catch (const std::exception& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                std::size_t(state.range(0)));
+    rebraid::RebraidSettings settings;
+    if (kind == TopKind::rebraid_sah) settings.opening_rule = rebraid::OpeningRule::sah;
+    std::size_t items = 0;
+    double seconds = 0.0;
+    double min_wall = std::numeric_limits<double>::infinity(), min_cpu = min_wall;
+    for (auto _ : state) {
+        const double cpu_start = process_cpu_seconds();
+        const auto start = std::chrono::steady_clock::now();
+        if (kind == TopKind::two_level) {
+            const rebraid::TopLevelBvh top =
+                rebraid::build_two_level(input->scene, input->object_bvhs);
+            items = top.items.size();
+        } else {
+            const rebraid::RebraidBuild build =
+                rebraid::build_rebraid(input->scene, input->object_bvhs, settings);
+            items = build.top.items.size();
+        }
+        const auto stop = std::chrono::steady_clock::now();
+        const double cpu = process_cpu_seconds() - cpu_start;
+        const double elapsed = std::chrono::duration<double>(stop - start).count();
+        state.SetIterationTime(elapsed);
+        seconds += elapsed;
+        min_wall = std::min(min_wall, elapsed);
+        min_cpu = std::min(min_cpu, cpu);
+    }
+    state.counters["items"] = double(items);
+    // The fastest single build, in wall time and in CPU time of the whole process (other
+    // load on a shared machine stretches wall times; on one thread the CPU time stays near
+    // the idle figure, on two it adds the workers' spinning).
+    state.counters["min_ms"] = min_wall * 1e3;
+    state.counters["min_cpu_ms"] = min_cpu * 1e3;
+    // From the measured wall time (rate counters divide by the main thread's CPU time).
+    if (items > 0 && state.iterations() > 0)
+        state.counters["ns/item"] = seconds * 1e9 / double(state.iterations()) / double(items);
+}
+
+std::vector<std::string> g_top_scenes = {"default", "cg57_cruiser.glb"};
+
+void register_top_benchmarks() {
+    const std::pair<const char*, TopKind> kinds[] = {{"TopBuild/twolevel/", TopKind::two_level},
+                                                     {"TopBuild/paper/", TopKind::rebraid_paper},
+                                                     {"TopBuild/sah/", TopKind::rebraid_sah}};
+    for (const std::string& scene : g_top_scenes)
+        for (const auto& [prefix, kind] : kinds) {
+            const std::string label = std::filesystem::path(scene).filename().string();
+            benchmark::RegisterBenchmark(
+                (prefix + label).c_str(),
+                [scene, kind = kind](benchmark::State& s) { top_build(s, scene, kind); })
+                ->Arg(1)
+                ->Arg(2)
+                ->ArgName("threads")
+                ->Unit(benchmark::kMillisecond)
+                ->UseManualTime()
+                ->ComputeStatistics("min", [](const std::vector<double>& v) {
+                    return *std::min_element(v.begin(), v.end());
+                });
+        }
+}
+
 void register_benchmarks() {
     using Measure = void (*)(benchmark::State&, const std::string&);
     const std::pair<const char*, Measure> measures[] = {{"OwnObjectBuild/", own_object_build},
@@ -196,17 +309,23 @@ int main(int argc, char** argv) {
     g_scene_dir = default_scene_dir();
     for (int i = 1; i < argc; ++i) {
         constexpr const char* kFlag = "--scene-dir=";
-        if (std::strncmp(argv[i], kFlag, std::strlen(kFlag)) == 0) {
+        constexpr const char* kTopFlag = "--top-scene=";
+        if (std::strncmp(argv[i], kTopFlag, std::strlen(kTopFlag)) == 0) {
+            g_top_scenes.push_back(argv[i] + std::strlen(kTopFlag));
+        } else if (std::strncmp(argv[i], kFlag, std::strlen(kFlag)) == 0) {
             g_scene_dir = argv[i] + std::strlen(kFlag);
         } else if (std::strcmp(argv[i], "--scene-dir") == 0 && i + 1 < argc) {
             g_scene_dir = argv[++i];
         } else {
-            std::fprintf(stderr, "bench_build: unknown argument '%s' (expected --scene-dir=DIR)\n",
+            std::fprintf(stderr,
+                         "bench_build: unknown argument '%s' (expected --scene-dir=DIR or "
+                         "--top-scene=FILE)\n",
                          argv[i]);
             return 1;
         }
     }
     register_benchmarks();
+    register_top_benchmarks();
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     return 0;

@@ -13,12 +13,13 @@
 // (over the frames), vs_rebuild (sah over the SAH of a fresh build of the last frame),
 // rebuilds (frames on which the strategy rebuilt), repairs (frames on which auto ran its
 // repair pass), cpu_ms (process CPU time per frame of the updates alone: at 1 thread the
-// figure least disturbed by other work on the machine). rotate_lazy searches a node for
-// rotations only when its children grew by 1% since its last search (min_growth_to_search =
-// 0.01; rotate_lazy_0.003: 0.3%); rotate_no_search is the rotation pass without its move
-// search and refit_pre_split a refit of the same one-triangle-per-leaf tree (the cost
-// rotations add is measured against them); rotate_eager searches every node every pass
-// (Kopta's schedule, today also the default); restructure_rotates runs the rotation pass
+// figure least disturbed by other work on the machine). rotate is the default rotation pass
+// (split_merge leaves, two moves per node, a node searched once its children grew 1 %:
+// RotationSettings); rotate_no_search is that pass without its move search, rotate_eager
+// searches every node every pass, rotate_one_per_node applies one move per node;
+// rotate_pre_split is Kopta's schedule (one triangle per leaf, one move, every node every
+// pass) and rotate_pre_split_lazy the same searching at 1 % growth; refit_pre_split is a refit
+// of the one-triangle-per-leaf tree; restructure_rotates runs the rotation pass
 // instead of a plain refit before restructuring; treelet_pre_split samples treelets in a
 // tree of one triangle per leaf (default root_fraction, or 0.2);
 // auto_<repair> is auto with that repair between its two factors (plain auto: refit only).
@@ -151,18 +152,24 @@ std::vector<Variant> variants() {
             settings.build = {};
         }
         if (strategy == UpdateStrategy::rotate) {
+            // The default: split_merge, two moves per node, lazy search (1 % growth).
             settings.rotation.max_rotations_per_node = 0;
             list.push_back({"rotate_no_search", settings});
-            settings.rotation.max_rotations_per_node = 1;
-            settings.rotation.min_growth_to_search = 0.01f;
-            list.push_back({"rotate_lazy", settings});
-            settings.rotation.min_growth_to_search = 0.003f;
-            list.push_back({"rotate_lazy_0.003", settings});
+            settings.rotation = {};
             settings.rotation.min_growth_to_search = 0.0f;
             list.push_back({"rotate_eager", settings});
             settings.rotation = {};
-            settings.rotation.leaf_mode = rebraid::RotationLeafMode::split_merge;
-            list.push_back({"rotate_split_merge", settings});
+            settings.rotation.max_rotations_per_node = 1;
+            list.push_back({"rotate_one_per_node", settings});
+            // Kopta's schedule: one triangle per leaf, one move per node, every node.
+            settings.rotation = {};
+            settings.rotation.leaf_mode = rebraid::RotationLeafMode::pre_split;
+            settings.rotation.max_rotations_per_node = 1;
+            settings.rotation.min_growth_to_search = 0.0f;
+            list.push_back({"rotate_pre_split", settings});
+            settings.rotation.min_growth_to_search = 0.01f;
+            list.push_back({"rotate_pre_split_lazy", settings});
+            settings.rotation = {};
         }
         if (strategy == UpdateStrategy::automatic) {
             for (UpdateStrategy repair :

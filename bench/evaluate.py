@@ -6,12 +6,18 @@
   evaluate.py sweep SCENE... --plot P.png  Figure 4: SAH and Mrays/s against open_threshold
                                            and against the budget factor, and a plot
   evaluate.py plot --json SWEEP.json --plot P.png   the plot again from a sweep's raw results
+  evaluate.py compare SCENE... --accel LIST [--baseline NAME] [--rounds K]
+                                           variants side by side (issue 10): SAH, Mrays/s and
+                                           top build ms per scene, ratios to the baseline
 
 Every number comes from one `rebraid bench` run per scene (and per setting in the sweep), so
-the structures of a table are measured on the same rays in the same process.
+the structures of a table are measured on the same rays in the same process. `compare` runs
+that bench K times per scene and reports, per variant, the median over the rounds (Mrays/s of
+one process move by 10-20 % with memory placement; rounds average that out); SAH is exact.
 """
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -97,6 +103,59 @@ def sweep(args):
         plot(results, args.plot)
 
 
+def median(values):
+    ordered = sorted(values)
+    middle = len(ordered) // 2
+    return ordered[middle] if len(ordered) % 2 else 0.5 * (ordered[middle - 1] + ordered[middle])
+
+
+def median_over_rounds(rounds, accel, key):
+    values = [r[key] for run in rounds for r in run if r["accel"] == accel and r.get(key) is not None]
+    return median(values) if values else None
+
+
+def compare(args):
+    accels = args.accel.split(",")
+    if args.baseline not in accels:
+        sys.exit(f"evaluate.py compare: the baseline {args.baseline} is not in --accel")
+    metrics = [("sah", "SAH (exact; lower is better)", "{:.2f}"),
+               ("mrays_primary", "primary Mrays/s (median of rounds)", "{:.2f}"),
+               ("mrays_diffuse", "diffuse Mrays/s (median of rounds)", "{:.2f}"),
+               ("top_build_ms", "top-level build ms (median of rounds)", "{:.2f}")]
+    raw = {}
+    summary = {}
+    for scene in args.scenes:
+        rounds = [bench(args.binary, scene, accels, args.rays, args.repetitions)
+                  for _ in range(args.rounds)]
+        raw[name_of(scene)] = rounds
+        summary[name_of(scene)] = {accel: {key: median_over_rounds(rounds, accel, key)
+                                           for key, _, _ in metrics} for accel in accels}
+    if args.json:
+        with open(args.json, "w") as out:
+            json.dump({"raw": raw, "median": summary}, out, indent=1)
+    for key, title, fmt in metrics:
+        print(f"\n#### {title}, ratio to {args.baseline}\n")
+        print("| scene | " + " | ".join(accels) + " |")
+        print("|---|" + "---|" * len(accels))
+        logs = {accel: [] for accel in accels}
+        for name, group in summary.items():
+            base = group[args.baseline][key]
+            cells = []
+            for accel in accels:
+                value = group[accel][key]
+                if value is None:
+                    cells.append("-")
+                elif accel == args.baseline or not base:
+                    cells.append(fmt.format(value))
+                else:
+                    cells.append(f"{fmt.format(value)} ({value / base:.2f})")
+                    logs[accel].append(value / base)
+            print(f"| {name} | " + " | ".join(cells) + " |")
+        geo = [f"{math.exp(sum(map(math.log, v)) / len(v)):.3f}" if v and all(x > 0 for x in v) else "-"
+               for v in logs.values()]
+        print("| geometric mean of ratios | " + " | ".join(geo) + " |")
+
+
 def plot(results, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -124,19 +183,22 @@ def plot(results, path):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("mode", choices=["tables", "sweep", "plot"])
+    parser.add_argument("mode", choices=["tables", "sweep", "plot", "compare"])
     parser.add_argument("scenes", nargs="*", help="scene files, or 'default'")
     parser.add_argument("--binary", default=DEFAULT_BINARY, help="the rebraid command")
     parser.add_argument("--rays", type=int, default=230400)
     parser.add_argument("--repetitions", type=int, default=5)
     parser.add_argument("--json", help="also write the raw results here")
     parser.add_argument("--plot", help="sweep: write the plot here (needs python3-matplotlib)")
+    parser.add_argument("--accel", default=",".join(ACCELS), help="compare: the variants")
+    parser.add_argument("--baseline", default="rebraid", help="compare: ratios are to this variant")
+    parser.add_argument("--rounds", type=int, default=3, help="compare: bench runs per scene")
     args = parser.parse_args()
     if args.mode == "plot":
         with open(args.json) as raw:
             plot(json.load(raw), args.plot)
     else:
-        (tables if args.mode == "tables" else sweep)(args)
+        {"tables": tables, "sweep": sweep, "compare": compare}[args.mode](args)
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "embree_glue/embree_geometry.h"
 #include "embree_glue/embree_interposer_registry.h"
 #include "rebraid/build_timer.h"
 #include "rebraid/error.h"
@@ -149,11 +150,7 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     // shares are left untouched.
     if (!(in.tnear <= in.tfar)) return;
     if (is_ray_mask_supported_ && in.mask == 0) return;
-    Ray ray;
-    ray.org = {in.org_x, in.org_y, in.org_z};
-    ray.dir = {in.dir_x, in.dir_y, in.dir_z};
-    ray.tnear = in.tnear;
-    ray.tfar = in.tfar;
+    const Ray ray = glue::from_embree_ray(in);
     const Hit hit = accel_->intersect(ray);
     if (!hit.is_hit()) return;
     const MeshId mesh_id = converted_.scene.instances[hit.instance_id].mesh_id;
@@ -204,11 +201,7 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
 void EmbreeAccel::occluded1(RTCRay& in) const noexcept {
     if (!(in.tnear <= in.tfar)) return;
     if (is_ray_mask_supported_ && in.mask == 0) return;
-    Ray ray;
-    ray.org = {in.org_x, in.org_y, in.org_z};
-    ray.dir = {in.dir_x, in.dir_y, in.dir_z};
-    ray.tnear = in.tnear;
-    ray.tfar = in.tfar;
+    const Ray ray = glue::from_embree_ray(in);
     if (accel_->occluded(ray)) in.tfar = -std::numeric_limits<float>::infinity();
 }
 

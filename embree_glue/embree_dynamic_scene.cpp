@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <string>
 
 #include "embree_glue/embree_geometry.h"
@@ -188,32 +187,12 @@ EmbreeFrameTimes EmbreeDynamicAccel::update() {
 
 Hit EmbreeDynamicAccel::intersect_counted(const Ray& ray, TraversalCounters* /*counters*/) const {
     if (!is_traceable(ray)) return Hit{};
-    RTCRayHit rayhit{};
-    rayhit.ray = to_embree_ray(ray);
-    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcIntersect1(top_scene_.get(), &context, &rayhit);
-    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
-    Hit hit;
-    hit.t = rayhit.ray.tfar;
-    hit.instance_id =
-        mode_ == EmbreeDynamicMode::instanced ? rayhit.hit.instID[0] : rayhit.hit.geomID;
-    hit.prim_id = rayhit.hit.primID;
-    hit.u = rayhit.hit.u;
-    hit.v = rayhit.hit.v;
-    return hit;
+    return embree_closest_hit(top_scene_.get(), ray, mode_ == EmbreeDynamicMode::instanced);
 }
 
 bool EmbreeDynamicAccel::occluded(const Ray& ray) const {
     if (!is_traceable(ray)) return false;
-    RTCRay rtc_ray = to_embree_ray(ray);
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcOccluded1(top_scene_.get(), &context, &rtc_ray);
-    return rtc_ray.tfar == -std::numeric_limits<float>::infinity();
+    return embree_is_occluded(top_scene_.get(), ray);
 }
 
 AccelStats EmbreeDynamicAccel::stats() const {

@@ -52,6 +52,43 @@ RTCRay to_embree_ray(const Ray& ray) {
     return out;
 }
 
+Ray from_embree_ray(const RTCRay& ray) {
+    Ray out;
+    out.org = {ray.org_x, ray.org_y, ray.org_z};
+    out.dir = {ray.dir_x, ray.dir_y, ray.dir_z};
+    out.tnear = ray.tnear;
+    out.tfar = ray.tfar;
+    return out;
+}
+
+Hit embree_closest_hit(RTCScene scene, const Ray& ray, bool instance_id_is_inst_id) {
+    RTCRayHit rayhit{};
+    rayhit.ray = to_embree_ray(ray);
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(scene, &context, &rayhit);
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
+    Hit hit;
+    hit.t = rayhit.ray.tfar;
+    hit.instance_id = instance_id_is_inst_id ? rayhit.hit.instID[0] : rayhit.hit.geomID;
+    hit.prim_id = rayhit.hit.primID;
+    hit.u = rayhit.hit.u;
+    hit.v = rayhit.hit.v;
+    return hit;
+}
+
+bool embree_is_occluded(RTCScene scene, const Ray& ray) {
+    RTCRay embree_ray = to_embree_ray(ray);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcOccluded1(scene, &context, &embree_ray);
+    // Embree marks an occluded ray by setting tfar to -inf.
+    return embree_ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
 void write_vertices(RTCGeometry geometry, const Mesh& mesh, const AffineTransform* to_world) {
     auto* vertices =
         static_cast<Vec3f*>(rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0));

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
-#include <limits>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -102,35 +101,14 @@ enum class InstanceIdSource { geom_id, inst_id };
 Hit intersect_scene(RTCScene scene, const Ray& ray, InstanceIdSource source,
                     const EmbreeRayLimits& limits, const char* accel_name) {
     if (check_ray(ray, limits, accel_name) == RayCheck::empty_segment) return Hit{};
-    RTCRayHit rayhit{};
-    rayhit.ray = to_embree_ray(ray);
-    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcIntersect1(scene, &context, &rayhit);
-    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
-    Hit hit;
-    hit.t = rayhit.ray.tfar;
-    hit.instance_id =
-        source == InstanceIdSource::geom_id ? rayhit.hit.geomID : rayhit.hit.instID[0];
-    hit.prim_id = rayhit.hit.primID;
-    hit.u = rayhit.hit.u;
-    hit.v = rayhit.hit.v;
-    return hit;
+    return embree_closest_hit(scene, ray, source == InstanceIdSource::inst_id);
 }
 
 bool occluded_scene(RTCScene scene, const Ray& ray, const EmbreeRayLimits& limits,
                     const char* accel_name) {
+    // The segment check rules out an input tfar of -inf, Embree's mark of an occluded ray.
     if (check_ray(ray, limits, accel_name) == RayCheck::empty_segment) return false;
-    RTCRay embree_ray = to_embree_ray(ray);
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcOccluded1(scene, &context, &embree_ray);
-    // Embree marks an occluded ray by setting tfar to -inf; the segment check above rules out
-    // an input tfar of -inf.
-    return embree_ray.tfar == -std::numeric_limits<float>::infinity();
+    return embree_is_occluded(scene, ray);
 }
 
 void validate_input(const Scene& scene, const char* accel_name) {

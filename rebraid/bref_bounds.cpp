@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rebraid/vertex_bref_bounds.h"
+
 namespace rebraid {
 namespace {
 
@@ -36,6 +38,8 @@ BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_
         to_world == AffineTransform::identity())
         return to_world.transform_bbox(node_box);
     if (node.is_leaf()) return transformed_leaf_bounds(bvh, node, to_world);
+    if (rule == BRefBoundsRule::transformed_vertices)
+        return vertex_world_bounds(bvh, node, node_box, to_world);
     const WideNode& wide = bvh.nodes[node.node_id()];
     BBox3f box;
     for (int c = 0; c < kBvhWidth && !wide.children[c].is_empty(); ++c)

@@ -19,6 +19,10 @@ enum class BRefBoundsRule {
     /// BRefs of rotated instances lose less of their object-space tightness. Costs one read
     /// of the node per BRef; for identity transforms both rules give the same box.
     transformed_children,
+    /// Tight: the box of the node's transformed vertices to within 1 % of its extent
+    /// (vertex_bref_bounds.h), found by branch and bound over the object BVH in a few
+    /// root-to-leaf paths per face.
+    transformed_vertices,
 };
 
 /// World-space bounds of the BRef to `node` of `bvh` placed by `to_world`; `node_box` is the

@@ -8,6 +8,7 @@
 #include "rebraid/bref.h"
 #include "rebraid/bref_bounds.h"
 #include "rebraid/object_bvh.h"
+#include "rebraid/object_subtree_counts.h"
 #include "rebraid/transform.h"
 
 namespace rebraid {
@@ -18,9 +19,10 @@ struct BRefSource {
     std::span<const std::uint32_t> instance_mesh;      ///< index = InstanceId
     std::span<const AffineTransform> object_to_world;  ///< index = InstanceId
     BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_box;
-    /// Per mesh, triangles below each inner node (object_subtree_counts.h). Empty: children
-    /// get the paper's estimate, parent count / number of children (§5.3).
-    std::span<const std::vector<std::uint32_t>> subtree_prims;
+    /// Triangles below each object node (object_subtree_counts.h), counted per mesh when
+    /// first needed. Null: children get the paper's estimate, parent count / number of
+    /// children (§5.3).
+    const LazySubtreeCounts* subtree_counts = nullptr;
     /// Leaves of several triangles open into one BRef per triangle.
     bool open_leaves = false;
     /// Optional, per target slot (rebraid_cost_guard.h): what the BRef's object node costs
@@ -32,7 +34,7 @@ struct BRefSource {
     const ObjectBvh& bvh_of(const BRefTarget& target) const {
         return object_bvhs[instance_mesh[target.instance_id]];
     }
-    bool has_exact_counts() const { return !subtree_prims.empty(); }
+    bool has_exact_counts() const { return subtree_counts != nullptr; }
     bool is_tracking_costs() const { return !node_cost.empty(); }
 };
 
@@ -73,12 +75,11 @@ void for_each_bref_child(const BRefSource& source, const BRefTarget& target, Vis
         visit(wide.children[c], wide.child_bounds(c));
 }
 
-/// Triangles below `node` of the BVH of `target`'s instance, from source.subtree_prims
+/// Triangles below `node` of the BVH of `target`'s instance, from source.subtree_counts
 /// (precondition: has_exact_counts()).
 inline std::uint32_t exact_prim_count(const BRefSource& source, const BRefTarget& target,
                                       NodeRef node) {
-    if (node.is_leaf()) return node.prim_count();
-    return source.subtree_prims[source.instance_mesh[target.instance_id]][node.node_id()];
+    return source.subtree_counts->prim_count(source.instance_mesh[target.instance_id], node);
 }
 
 }  // namespace rebraid

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "rebraid/build_box.h"
 #include "rebraid/bvh_stats.h"
 
 namespace rebraid {
@@ -39,19 +40,118 @@ std::uint32_t count_openable(std::span<const BuildPrim> prims, std::span<const B
                                 std::plus<>());
 }
 
+OpeningScan scan_for_opening(std::span<const BuildPrim> prims, std::span<const BRefTarget> targets,
+                             const OpeningCriterion& criterion, std::size_t parallel_threshold) {
+    if (prims.empty()) return {};
+    const InstanceId first_instance = targets[prims.front().id].instance_id;
+    auto scan = [&](const tbb::blocked_range<std::size_t>& r, OpeningScan result) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const BRefTarget& target = targets[prims[i].id];
+            result.openable += criterion.wants_to_open(prims[i], target, i);
+            result.is_single_instance &= target.instance_id == first_instance;
+        }
+        return result;
+    };
+    if (prims.size() < parallel_threshold) return scan({0, prims.size()}, OpeningScan{});
+    // Integer sums and a logical and: the result does not depend on the blocks.
+    return tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, prims.size(), kBlock),
+                                OpeningScan{}, scan, [](OpeningScan a, const OpeningScan& b) {
+                                    a.openable += b.openable;
+                                    a.is_single_instance &= b.is_single_instance;
+                                    return a;
+                                });
+}
+
+namespace {
+
+/// Opens the BRef `parent` (slot `parent_index` of the array) into its children (§5.3): the
+/// first child replaces it, keeping its target slot; the `extra` siblings go to the free
+/// space at `offset` past the segment's end, each with the next target slot.
+void open_one(std::uint32_t parent_index, std::uint64_t offset, std::uint32_t extra,
+              const BRefSegment& segment, std::span<BuildPrim> prims, std::span<BRefTarget> targets,
+              const BRefSource& source) {
+    BuildPrim& parent = prims[parent_index];
+    const BRefTarget parent_target = targets[parent.id];
+    const ObjectBvh& bvh = source.bvh_of(parent_target);
+    const AffineTransform& to_world = source.object_to_world[parent_target.instance_id];
+    const std::uint32_t estimated_weight = std::max(1u, parent.weight / (extra + 1));
+    if (source.is_tracking_costs()) {
+        // Slot parent.id only ever belongs to one segment at a time: no race.
+        source.removed_cost[parent.id] += source.node_cost[parent.id];
+    }
+    std::uint32_t c = 0;
+    for_each_bref_child(source, parent_target, [&](NodeRef child, const BBox3f& box) {
+        const BBox3f bounds = bref_world_bounds(bvh, child, box, to_world, source.bounds_rule);
+        const std::uint32_t weight =
+            source.has_exact_counts() ? std::max(1u, exact_prim_count(source, parent_target, child))
+                                      : estimated_weight;
+        const BRefTarget child_target{parent_target.instance_id, child};
+        const std::uint32_t child_slot =
+            c == 0 ? parent.id : segment.next_target + std::uint32_t(offset + c - 1);
+        if (source.is_tracking_costs())
+            source.node_cost[child_slot] =
+                parent_target.object_node.is_leaf()
+                    ? 0.0  // a triangle of an opened leaf: no object node of its own
+                    : mapped_box_half_area(box, to_world) *
+                          (child.is_leaf() ? child.prim_count() : 1.0);
+        if (c == 0) {  // the first child replaces its parent, keeping its target slot
+            parent = {bounds, parent.id, weight};
+            targets[parent.id] = child_target;
+        } else {
+            prims[segment.end + std::uint32_t(offset + c - 1)] = {bounds, child_slot, weight};
+            targets[child_slot] = child_target;
+        }
+        ++c;
+    });
+}
+
+/// open_brefs for segments below the parallel threshold: one pass, a running offset (the
+/// blocked version's prefix sums, computed as it goes), no allocation.
+std::uint32_t open_brefs_serially(BRefSegment& segment, std::span<BuildPrim> prims,
+                                  std::span<BRefTarget> targets, const OpeningCriterion& criterion,
+                                  const BRefSource& source, RangeInfo* resulting_info) {
+    const std::uint32_t first = segment.start, end = segment.end;
+    const std::uint32_t space = segment.free_space();
+    std::uint64_t offset = 0;
+    std::uint32_t opened = 0;
+    bool is_full = false;
+    RangeAccumulator summary;
+    for (std::uint32_t i = first; i < end; ++i) {
+        if (!is_full) {
+            const BRefTarget& target = targets[prims[i].id];
+            if (criterion.wants_to_open(prims[i], target, i - first)) {
+                const std::uint32_t extra = extra_children(target, source);
+                if (offset + extra > space) {
+                    is_full = true;  // this and every later BRef stay closed
+                } else {
+                    open_one(i, offset, extra, segment, prims, targets, source);
+                    offset += extra;
+                    ++opened;
+                }
+            }
+        }
+        if (resulting_info) summary.add(prims[i]);
+    }
+    if (resulting_info && opened > 0) {
+        for (std::uint64_t k = 0; k < offset; ++k) summary.add(prims[end + k]);
+        *resulting_info = summary.to_info();
+    }
+    segment.end += std::uint32_t(offset);
+    segment.next_target += std::uint32_t(offset);
+    return opened;
+}
+
+}  // namespace
+
 std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
                          std::span<BRefTarget> targets, const OpeningCriterion& criterion,
-                         const BRefSource& source, std::size_t parallel_threshold) {
+                         const BRefSource& source, std::size_t parallel_threshold,
+                         RangeInfo* resulting_info) {
     const std::uint32_t first = segment.start, count = segment.size();
+    if (count < parallel_threshold)
+        return open_brefs_serially(segment, prims, targets, criterion, source, resulting_info);
     const std::uint32_t space = segment.free_space();
     const std::size_t block_count = (count + kBlock - 1) / kBlock;
-    auto for_each_block = [&](auto&& body) {
-        if (count < parallel_threshold) {
-            for (std::size_t b = 0; b < block_count; ++b) body(b);
-        } else {
-            tbb::parallel_for(std::size_t(0), block_count, body);
-        }
-    };
     auto block_range = [&](std::size_t b) {
         return std::pair<std::uint32_t, std::uint32_t>(
             first + std::uint32_t(b * kBlock),
@@ -61,7 +161,7 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
     // Pass 1: children wanted per block. Exclusive prefix sums give each block's first
     // output offset in the free space.
     std::vector<std::uint64_t> wanted(block_count + 1, 0);
-    for_each_block([&](std::size_t b) {
+    tbb::parallel_for(std::size_t(0), block_count, [&](std::size_t b) {
         const auto [begin, end] = block_range(b);
         std::uint64_t sum = 0;
         for (std::uint32_t i = begin; i < end; ++i) {
@@ -77,50 +177,15 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
     // block records how far into the free space its last opening reached.
     std::vector<std::uint32_t> opened_in_block(block_count, 0);
     std::vector<std::uint64_t> reached(block_count, 0);
-    for_each_block([&](std::size_t b) {
+    tbb::parallel_for(std::size_t(0), block_count, [&](std::size_t b) {
         const auto [begin, end] = block_range(b);
         std::uint64_t offset = wanted[b];
         for (std::uint32_t i = begin; i < end && offset <= space; ++i) {
-            BuildPrim& parent = prims[i];
-            const BRefTarget parent_target = targets[parent.id];
-            if (!criterion.wants_to_open(parent, parent_target, i - first)) continue;
-            const std::uint32_t extra = extra_children(parent_target, source);
+            const BRefTarget& target = targets[prims[i].id];
+            if (!criterion.wants_to_open(prims[i], target, i - first)) continue;
+            const std::uint32_t extra = extra_children(target, source);
             if (offset + extra > space) break;  // this and every later BRef stay closed
-            const ObjectBvh& bvh = source.bvh_of(parent_target);
-            const AffineTransform& to_world = source.object_to_world[parent_target.instance_id];
-            const std::uint32_t estimated_weight = std::max(1u, parent.weight / (extra + 1));
-            if (source.is_tracking_costs()) {
-                // Slot parent.id only ever belongs to one segment at a time: no race.
-                source.removed_cost[parent.id] += source.node_cost[parent.id];
-            }
-            std::uint32_t c = 0;
-            for_each_bref_child(source, parent_target, [&](NodeRef child, const BBox3f& box) {
-                const BBox3f bounds =
-                    bref_world_bounds(bvh, child, box, to_world, source.bounds_rule);
-                const std::uint32_t weight =
-                    source.has_exact_counts()
-                        ? std::max(1u, exact_prim_count(source, parent_target, child))
-                        : estimated_weight;
-                const BRefTarget child_target{parent_target.instance_id, child};
-                const std::uint32_t child_slot =
-                    c == 0 ? parent.id : segment.next_target + std::uint32_t(offset + c - 1);
-                if (source.is_tracking_costs())
-                    source.node_cost[child_slot] =
-                        parent_target.object_node.is_leaf()
-                            ? 0.0  // a triangle of an opened leaf: no object node of its own
-                            : mapped_box_half_area(box, to_world) *
-                                  (child.is_leaf() ? child.prim_count() : 1.0);
-                if (c == 0) {  // the first child replaces its parent, keeping its target slot
-                    parent = {bounds, parent.id, weight};
-                    targets[parent.id] = child_target;
-                } else {
-                    const auto slot = std::uint32_t(offset + c - 1);
-                    const std::uint32_t target_slot = segment.next_target + slot;
-                    prims[segment.end + slot] = {bounds, target_slot, weight};
-                    targets[target_slot] = child_target;
-                }
-                ++c;
-            });
+            open_one(i, offset, extra, segment, prims, targets, source);
             offset += extra;
             reached[b] = offset;
             ++opened_in_block[b];
@@ -137,6 +202,9 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
     }
     segment.end += std::uint32_t(used);
     segment.next_target += std::uint32_t(used);
+    if (resulting_info && opened > 0)
+        *resulting_info =
+            compute_range_info(prims.subspan(first, segment.size()), parallel_threshold);
     return opened;
 }
 

@@ -4,6 +4,7 @@
 #include <span>
 
 #include "rebraid/bbox.h"
+#include "rebraid/binned_split.h"
 #include "rebraid/bref.h"
 #include "rebraid/bref_bounds.h"
 #include "rebraid/bref_children.h"
@@ -37,6 +38,20 @@ struct OpeningCriterion {
 std::uint32_t count_openable(std::span<const BuildPrim> prims, std::span<const BRefTarget> targets,
                              const OpeningCriterion& criterion, std::size_t parallel_threshold);
 
+/// What the builder learns from one pass over a segment before opening it: how many BRefs
+/// meet the criterion (count_openable, for the §5.2 split of the free space; none means
+/// nothing can open) and whether they all belong to one instance (the first termination
+/// rule of §4.4, as all_same_instance). One pass instead of three.
+struct OpeningScan {
+    std::uint32_t openable = 0;
+    bool is_single_instance = true;  ///< also true for no BRefs
+};
+
+/// The scan of `prims` under `criterion` (whose `selected` must be empty); parallel at or
+/// above `parallel_threshold` prims, with a result independent of the division.
+OpeningScan scan_for_opening(std::span<const BuildPrim> prims, std::span<const BRefTarget> targets,
+                             const OpeningCriterion& criterion, std::size_t parallel_threshold);
+
 /// Paper §5.3: opens the BRefs of `segment` that meet `criterion`, in array order, while the
 /// segment's free space lasts (a BRef opens iff the children wanted by it and all BRefs before
 /// it fit, so serial and parallel runs open exactly the same ones). The first child replaces
@@ -45,9 +60,13 @@ std::uint32_t count_openable(std::span<const BuildPrim> prims, std::span<const B
 /// its primitive count is the parent's divided by the number of children, or the real count
 /// when `source` has exact counts. Updates
 /// `segment.end` and `segment.next_target`; returns how many BRefs were opened. Large
-/// segments are processed in parallel blocks whose output slots come from prefix sums.
+/// segments are processed in parallel blocks whose output slots come from prefix sums;
+/// smaller ones in one serial pass without allocating. When BRefs were opened and
+/// `resulting_info` is given, it receives the segment's range info after the opening
+/// (what compute_range_info would return), which saves the builder a pass.
 std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
                          std::span<BRefTarget> targets, const OpeningCriterion& criterion,
-                         const BRefSource& source, std::size_t parallel_threshold);
+                         const BRefSource& source, std::size_t parallel_threshold,
+                         RangeInfo* resulting_info = nullptr);
 
 }  // namespace rebraid

@@ -4,20 +4,52 @@
 
 #include <vector>
 
+#include "rebraid/vertex_bref_bounds.h"
+
 namespace rebraid {
 namespace {
 
 /// Sum of half areas of the top-level inner nodes below `ref` (whose box is `box`).
-double top_inner_cost(const TopLevelBvh& top, NodeRef ref, const BBox3f& box) {
+double inner_cost_below(const TopLevelBvh& top, NodeRef ref, const BBox3f& box) {
     if (!ref.is_inner()) return 0.0;
     const WideNode& node = top.nodes[ref.node_id()];
     double cost = box.half_area();
     for (int i = 0; i < kBvhWidth && !node.children[i].is_empty(); ++i)
-        cost += top_inner_cost(top, node.children[i], node.child_bounds(i));
+        cost += inner_cost_below(top, node.children[i], node.child_bounds(i));
     return cost;
 }
 
 }  // namespace
+
+double top_inner_cost(const TopLevelBvh& top) {
+    return inner_cost_below(top, top.root, top.bounds);
+}
+
+BBox3f instance_world_bounds(InstanceId instance_id, std::span<const ObjectBvh> object_bvhs,
+                             std::span<const std::uint32_t> instance_mesh,
+                             std::span<const AffineTransform> object_to_world) {
+    const ObjectBvh& bvh = object_bvhs[instance_mesh[instance_id]];
+    const AffineTransform& to_world = object_to_world[instance_id];
+    if (to_world == AffineTransform::identity()) return bvh.bounds;
+    return vertex_world_bounds(bvh, bvh.root, bvh.bounds, to_world, 0.0f);
+}
+
+double instanced_scene_half_area(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,
+                                 std::span<const std::uint32_t> instance_mesh,
+                                 std::span<const AffineTransform> object_to_world) {
+    std::vector<char> is_reached(object_to_world.size(), 0);
+    for (const TopLevelItem& item : top.items) is_reached[item.instance_id] = 1;
+    // Per instance in parallel; the union of boxes does not depend on the order.
+    std::vector<BBox3f> boxes(is_reached.size());
+    tbb::parallel_for(std::size_t(0), is_reached.size(), [&](std::size_t i) {
+        if (is_reached[i])
+            boxes[i] =
+                instance_world_bounds(InstanceId(i), object_bvhs, instance_mesh, object_to_world);
+    });
+    BBox3f scene;
+    for (const BBox3f& box : boxes) scene.extend(box);
+    return scene.half_area();
+}
 
 TreeCounts count_tree(std::span<const WideNode> nodes, NodeRef root) {
     TreeCounts counts;
@@ -56,9 +88,9 @@ double object_subtree_cost_from(const ObjectBvh& bvh, NodeRef ref, double entry_
     const WideNode& node = bvh.nodes[ref.node_id()];
     double cost = entry_area;
     for (int i = 0; i < kBvhWidth && !node.children[i].is_empty(); ++i)
-        cost += object_subtree_cost_from(bvh, node.children[i],
-                                         mapped_box_half_area(node.child_bounds(i), object_to_world),
-                                         object_to_world);
+        cost += object_subtree_cost_from(
+            bvh, node.children[i], mapped_box_half_area(node.child_bounds(i), object_to_world),
+            object_to_world);
     return cost;
 }
 
@@ -78,8 +110,9 @@ double object_bvh_sah(const ObjectBvh& bvh) {
 double top_level_sah(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,
                      std::span<const std::uint32_t> instance_mesh,
                      std::span<const AffineTransform> object_to_world) {
-    const double root_area = top.bounds.half_area();
-    if (root_area <= 0.0) return 0.0;
+    const double scene_area =
+        instanced_scene_half_area(top, object_bvhs, instance_mesh, object_to_world);
+    if (scene_area <= 0.0) return 0.0;
     // Items in parallel; the partial costs are summed in item order so the total is
     // reproducible to the last bit.
     std::vector<double> item_costs(top.items.size());
@@ -89,9 +122,9 @@ double top_level_sah(const TopLevelBvh& top, std::span<const ObjectBvh> object_b
             object_subtree_cost(object_bvhs[instance_mesh[item.instance_id]], item.object_node,
                                 top.item_bounds[i], object_to_world[item.instance_id]);
     });
-    double cost = top_inner_cost(top, top.root, top.bounds);
+    double cost = top_inner_cost(top);
     for (double c : item_costs) cost += c;
-    return cost / root_area;
+    return cost / scene_area;
 }
 
 }  // namespace rebraid

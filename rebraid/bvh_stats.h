@@ -33,9 +33,29 @@ double object_subtree_cost(const ObjectBvh& bvh, NodeRef ref, const BBox3f& worl
 /// SAH of a flat (world-space) BVH: object_subtree_cost of its root over its root area.
 double object_bvh_sah(const ObjectBvh& bvh);
 
+/// Sum of the half areas of the top level's inner nodes (each from its parent's stored box,
+/// the root's from top.bounds), in depth-first order.
+double top_inner_cost(const TopLevelBvh& top);
+
+/// The world box of instance `instance_id`'s triangles: its object BVH's box for an identity
+/// transform, else the box of its transformed vertices (vertex_world_bounds, exact).
+BBox3f instance_world_bounds(InstanceId instance_id, std::span<const ObjectBvh> object_bvhs,
+                             std::span<const std::uint32_t> instance_mesh,
+                             std::span<const AffineTransform> object_to_world);
+
+/// Half area of the union of instance_world_bounds() over the instances `top`'s items reach:
+/// the box of the scene's world-space triangles, which is the root box of a flat BVH over
+/// them. Every structure's SAH is normalised by it (README "SAH"), so that a top level whose
+/// root box is larger than the scene (transformed boxes of rotated instances) is not given a
+/// smaller SAH for it.
+double instanced_scene_half_area(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,
+                                 std::span<const std::uint32_t> instance_mesh,
+                                 std::span<const AffineTransform> object_to_world);
+
 /// SAH of a two-level structure (README "SAH"): the top-level inner nodes' half areas plus,
-/// for each item, the cost of its object subtree in world space, over the root half area.
-/// `instance_mesh` and `object_to_world` are indexed by instance id.
+/// for each item, the cost of its object subtree in world space, over the half area of the
+/// scene's box (instanced_scene_half_area). `instance_mesh` and `object_to_world` are indexed
+/// by instance id.
 double top_level_sah(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,
                      std::span<const std::uint32_t> instance_mesh,
                      std::span<const AffineTransform> object_to_world);

@@ -6,7 +6,6 @@
 #include <utility>
 
 #include "rebraid/build_timer.h"
-#include "rebraid/bvh_stats.h"
 #include "rebraid/error.h"
 #include "rebraid/rebraid_builder.h"
 
@@ -32,9 +31,20 @@ DynamicTop parse_dynamic_top(std::string_view name) {
                 "' (valid: twolevel, rebraid, rebraid-incremental)");
 }
 
+namespace {
+
+/// Per instance: 1 when it neither moves nor shows a deforming mesh (its SAH costs last).
+std::vector<char> fixed_instances(const DynamicScene& scene) {
+    std::vector<char> is_fixed(scene.scene().instances.size(), 1);
+    for (InstanceId id : scene.changing_instances()) is_fixed[id] = 0;
+    return is_fixed;
+}
+
+}  // namespace
+
 DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
                                      const DynamicSceneAccelSettings& settings)
-    : scene_(scene), settings_(settings) {
+    : scene_(scene), settings_(settings), sah_cache_(fixed_instances(scene)) {
     settings_.update.validate();
     settings_.static_build.validate();
     settings_.two_level_top.validate();
@@ -53,9 +63,13 @@ DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
         updaters_.empty() ? settings_.static_build : updaters_.front().rebuild_settings();
     std::vector<ObjectBvh> object_bvhs(world.meshes.size());
     tbb::parallel_for(std::size_t(0), world.meshes.size(), std::size_t(1), [&](std::size_t i) {
-        object_bvhs[i] = build_object_bvh(world.meshes[i], scene.is_dynamic_mesh(MeshId(i))
-                                                               ? dynamic_build
-                                                               : settings_.static_build);
+        const Mesh& mesh = world.meshes[i];
+        if (scene.is_dynamic_mesh(MeshId(i)))
+            object_bvhs[i] = build_object_bvh(mesh, dynamic_build);
+        else if (settings_.static_builder)
+            object_bvhs[i] = settings_.static_builder(mesh);
+        else
+            object_bvhs[i] = build_object_bvh(mesh, settings_.static_build);
     });
     if (settings_.top == DynamicTop::rebraid_incremental) {
         // Static: instances that neither move nor show a deforming mesh, whichever part of
@@ -79,7 +93,7 @@ DynamicSceneAccel::DynamicSceneAccel(const DynamicScene& scene,
     build_ms_ = timer.elapsed_ms();
 }
 
-void DynamicSceneAccel::assemble(std::vector<ObjectBvh> object_bvhs) {
+void DynamicSceneAccel::assemble(std::vector<ObjectBvh> object_bvhs, TopLevelBvh previous) {
     const Scene& world = scene_.scene();
     const BuildTimer timer;
     // The last structure's object BVHs were moved out already; freeing its top level before
@@ -94,7 +108,8 @@ void DynamicSceneAccel::assemble(std::vector<ObjectBvh> object_bvhs) {
         info.budget = build.budget;
         info.opened = build.opened;
     } else if (settings_.top == DynamicTop::rebraid_incremental) {
-        last_incremental_ = incremental_->build_frame(world, object_bvhs, changing_instances_);
+        last_incremental_ =
+            incremental_->build_frame(world, object_bvhs, changing_instances_, std::move(previous));
         top = std::move(last_incremental_.top);
         last_incremental_.top = {};
         info.brefs = last_incremental_.brefs;
@@ -110,6 +125,11 @@ void DynamicSceneAccel::assemble(std::vector<ObjectBvh> object_bvhs) {
 DynamicFrameReport DynamicSceneAccel::update() {
     DynamicFrameReport report;
     const Scene& world = scene_.scene();
+    // An incremental top that was not a full re-braid starts with the static top, which the
+    // next frame keeps: its arrays are reused instead of copying the static part again.
+    TopLevelBvh previous_top;
+    if (settings_.top == DynamicTop::rebraid_incremental && !last_incremental_.is_full_rebraid)
+        previous_top = std::move(*accel_).release_top_level();
     std::vector<ObjectBvh> object_bvhs = std::move(*accel_).release_object_bvhs();
     {
         const BuildTimer timer;
@@ -124,17 +144,18 @@ DynamicFrameReport DynamicSceneAccel::update() {
     }
     {
         const BuildTimer timer;
-        assemble(std::move(object_bvhs));
+        assemble(std::move(object_bvhs), std::move(previous_top));
         report.top_ms = timer.elapsed_ms();
     }
-    report.sah =
-        top_level_sah(accel_->top_level(), accel_->object_bvhs(), accel_->instance_meshes(), [&] {
-            std::vector<AffineTransform> transforms;
-            transforms.reserve(world.instances.size());
-            for (const Instance& instance : world.instances)
-                transforms.push_back(instance.object_to_world);
-            return transforms;
-        }());
+    {
+        // Outside both timed parts: the SAH is reported, not needed by the frame. Static
+        // instances' items cost the same every frame, so only the others are recomputed.
+        transforms_.resize(world.instances.size());
+        for (std::size_t i = 0; i < world.instances.size(); ++i)
+            transforms_[i] = world.instances[i].object_to_world;
+        report.sah = sah_cache_.sah(accel_->top_level(), accel_->object_bvhs(),
+                                    accel_->instance_meshes(), transforms_);
+    }
     return report;
 }
 

@@ -7,8 +7,10 @@
 
 #include "rebraid/build_settings.h"
 #include "rebraid/dynamic_scene.h"
+#include "rebraid/frame_sah_cache.h"
 #include "rebraid/incremental_top_level.h"
 #include "rebraid/instanced_accel.h"
+#include "rebraid/object_bvh_set.h"
 #include "rebraid/object_bvh_update.h"
 #include "rebraid/rebraid_settings.h"
 #include "rebraid/two_level_builder.h"
@@ -36,6 +38,11 @@ struct DynamicSceneAccelSettings {
     ObjectBvhUpdateSettings update;
     /// Builder of the static meshes' BVHs (built once).
     BuildSettings static_build;
+    /// When set, builds the static meshes' BVHs instead of the project's builder with
+    /// static_build: they are built once, so a slower builder of better trees (Embree's with
+    /// spatial splits, embree_glue/embree_bvh_builder.h) pays for itself over the frames. Its
+    /// trees are never refit, so they may hold a triangle in several leaves.
+    ObjectBvhBuilder static_builder;
     /// The plain top (top = two_level).
     BuildSettings two_level_top = default_top_level_settings();
     /// The re-braided top (top = rebraid; top = rebraid_incremental for both its parts).
@@ -48,7 +55,9 @@ struct DynamicSceneAccelSettings {
 struct DynamicFrameReport {
     double update_ms = 0.0;  ///< all dynamic object BVHs brought up to date
     double top_ms = 0.0;     ///< the top level rebuilt and the structure assembled
-    double sah = 0.0;        ///< SAH of the whole structure (README "SAH")
+    /// SAH of the whole structure (README "SAH"; top_level_sah(), with the costs of static
+    /// instances' items remembered from earlier frames: FrameSahCache). Not part of either time.
+    double sah = 0.0;
 };
 
 /// A two-level structure over a DynamicScene that follows its animation: static object BVHs
@@ -79,10 +88,13 @@ public:
     /// What the last incremental frame's top build did (top = rebraid_incremental); its
     /// `top` is empty, having moved into accel().
     const IncrementalTopBuild& last_incremental_build() const { return last_incremental_; }
+    /// What the frames' SAH computations remembered (DynamicFrameReport::sah).
+    const FrameSahCache& sah_cache() const { return sah_cache_; }
 
 private:
-    /// Builds the top level over `object_bvhs` and assembles the structure.
-    void assemble(std::vector<ObjectBvh> object_bvhs);
+    /// Builds the top level over `object_bvhs` and assembles the structure; `previous` is the
+    /// last frame's incremental top, whose arrays the next one reuses (empty otherwise).
+    void assemble(std::vector<ObjectBvh> object_bvhs, TopLevelBvh previous = {});
 
     const DynamicScene& scene_;
     DynamicSceneAccelSettings settings_;
@@ -92,6 +104,8 @@ private:
     std::optional<IncrementalTopLevel> incremental_;
     std::vector<InstanceId> changing_instances_;  ///< the incremental top's dynamic part
     IncrementalTopBuild last_incremental_;        ///< its top moved into accel_
+    FrameSahCache sah_cache_;                     ///< static items' SAH costs
+    std::vector<AffineTransform> transforms_;     ///< per instance, for the SAH
     double build_ms_ = 0.0;
 };
 

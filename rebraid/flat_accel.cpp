@@ -85,13 +85,12 @@ Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) co
     TraversalRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
     // The id lookup after traversal would miss the cache on large scenes: the ids of each
-    // leaf are asked for as the leaf is stacked or visited.
+    // hit are asked for as it is found.
     const InstanceId* instances = triangle_instance_.data();
     const PrimId* prims = triangle_prim_.data();
-    const auto prefetch_ids = [instances, prims](std::uint32_t first, std::uint32_t) {
-        // A leaf's ids (4 bytes a triangle) nearly always share the line of its first one.
-        __builtin_prefetch(instances + first);
-        __builtin_prefetch(prims + first);
+    const auto prefetch_ids = [instances, prims](std::uint32_t position) {
+        __builtin_prefetch(instances + position);
+        __builtin_prefetch(prims + position);
     };
     if (intersect_object_bvh_leaf_order(bvh_, bvh_.root, traversal_ray, hit, counters,
                                         prefetch_ids)) {

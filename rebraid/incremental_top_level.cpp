@@ -1,6 +1,7 @@
 #include "rebraid/incremental_top_level.h"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <unordered_map>
@@ -133,6 +134,44 @@ void IncrementalTopLevel::build_static(const Scene& scene, std::span<const Objec
 IncrementalTopBuild IncrementalTopLevel::build_frame(
     const Scene& scene, std::span<const ObjectBvh> object_bvhs,
     std::span<const InstanceId> dynamic_instances) const {
+    return build_frame(scene, object_bvhs, dynamic_instances, TopLevelBvh{});
+}
+
+void IncrementalTopLevel::check_starts_with_static_top(const TopLevelBvh& top) const {
+    const TopLevelBvh& fixed = static_.top;
+    const auto fail = [](const std::string& what) {
+        throw Error("IncrementalTopLevel::build_frame: the previous top " + what +
+                    " (pass a top an earlier build_frame() made since build_static())");
+    };
+    if (top.nodes.size() < fixed.nodes.size() || top.items.size() < fixed.items.size() ||
+        top.item_bounds.size() < fixed.items.size())
+        fail("has " + std::to_string(top.nodes.size()) + " nodes and " +
+             std::to_string(top.items.size()) + " items, fewer than the static top's " +
+             std::to_string(fixed.nodes.size()) + " and " + std::to_string(fixed.items.size()));
+    // A sample, not every byte: comparing all of it would cost what the reuse saves.
+    constexpr std::size_t kSamples = 64;
+    const auto same_node = [&](std::size_t i) {
+        return std::memcmp(&top.nodes[i], &fixed.nodes[i], sizeof(WideNode)) == 0;
+    };
+    const auto same_item = [&](std::size_t i) {
+        return top.items[i].instance_id == fixed.items[i].instance_id &&
+               top.items[i].object_node == fixed.items[i].object_node &&
+               top.item_bounds[i] == fixed.item_bounds[i];
+    };
+    for (std::size_t k = 0; k < kSamples && !fixed.nodes.empty(); ++k) {
+        const std::size_t i = k * (fixed.nodes.size() - 1) / (kSamples - 1);
+        if (!same_node(i)) fail("differs from the static top at node " + std::to_string(i));
+    }
+    for (std::size_t k = 0; k < kSamples && !fixed.items.empty(); ++k) {
+        const std::size_t i = k * (fixed.items.size() - 1) / (kSamples - 1);
+        if (!same_item(i)) fail("differs from the static top at item " + std::to_string(i));
+    }
+}
+
+IncrementalTopBuild IncrementalTopLevel::build_frame(const Scene& scene,
+                                                     std::span<const ObjectBvh> object_bvhs,
+                                                     std::span<const InstanceId> dynamic_instances,
+                                                     TopLevelBvh previous) const {
     const BuildTimer timer;
     if (static_build_count_ == 0)
         throw Error("IncrementalTopLevel::build_frame: build_static() has not run");
@@ -189,12 +228,23 @@ IncrementalTopBuild IncrementalTopLevel::build_frame(
         throw Error("IncrementalTopLevel::build_frame: " + std::to_string(item_count) +
                     " items exceed the limit of " + std::to_string(NodeRef::kMaxFirst));
     TopLevelBvh& top = out.top;
+    if (previous.nodes.empty() && previous.items.empty()) {
+        top.nodes.reserve(fixed.nodes.size() + upper.nodes.size());
+        top.nodes.assign(fixed.nodes.begin(), fixed.nodes.end());
+        top.items.reserve(item_count);
+        top.items.assign(fixed.items.begin(), fixed.items.end());
+        top.item_bounds.reserve(item_count);
+        top.item_bounds.assign(fixed.item_bounds.begin(), fixed.item_bounds.end());
+    } else {
+        check_starts_with_static_top(previous);
+        top = std::move(previous);
+    }
+    top.nodes.resize(fixed.nodes.size());
     top.nodes.reserve(fixed.nodes.size() + upper.nodes.size());
-    top.nodes.assign(fixed.nodes.begin(), fixed.nodes.end());
+    top.items.resize(fixed.items.size());
     top.items.reserve(item_count);
-    top.items.assign(fixed.items.begin(), fixed.items.end());
+    top.item_bounds.resize(fixed.items.size());
     top.item_bounds.reserve(item_count);
-    top.item_bounds.assign(fixed.item_bounds.begin(), fixed.item_bounds.end());
     const auto node_offset = std::uint32_t(fixed.nodes.size());
     auto graft = [&](NodeRef ref) {
         if (ref.is_empty()) return ref;

@@ -76,6 +76,17 @@ public:
     /// has not run, or a dynamic instance is static or out of range.
     IncrementalTopBuild build_frame(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                                     std::span<const InstanceId> dynamic_instances) const;
+    /// As above, building the frame's top in `previous`: either empty (the static top is
+    /// copied, as above) or the top of an earlier build_frame() of this object since the last
+    /// build_static() that was not a full re-braid. Such a top starts with the static top,
+    /// which no frame changes, so its arrays are cut back to it and only the frame's part is
+    /// appended, instead of copying the static top (about 10 MB for 20,000 static instances)
+    /// into new arrays every frame. The result equals the one of the overload above. Throws
+    /// rebraid::Error when `previous` is visibly not such a top (shorter than the static top,
+    /// or differing from it at the nodes and items it samples).
+    IncrementalTopBuild build_frame(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                    std::span<const InstanceId> dynamic_instances,
+                                    TopLevelBvh previous) const;
 
     /// The static top (empty before build_static()).
     const TopLevelBvh& static_top() const { return static_.top; }
@@ -85,6 +96,9 @@ public:
     double static_build_ms() const { return static_build_ms_; }
 
 private:
+    /// Throws rebraid::Error unless `top` visibly starts with the static top.
+    void check_starts_with_static_top(const TopLevelBvh& top) const;
+
     RebraidSettings rebraid_;
     IncrementalTopSettings settings_;
     RebraidBuild static_;

@@ -32,6 +32,10 @@ public:
     /// Hands the object BVHs back, e.g. to update them for the next frame of an animation
     /// without copying the static ones; the structure is then fit only for destruction.
     std::vector<ObjectBvh> release_object_bvhs() && { return std::move(object_bvhs_); }
+    /// Hands the top level back, e.g. for an incremental top to rebuild the next frame's in
+    /// the same arrays; the structure is then fit only for destruction or
+    /// release_object_bvhs().
+    TopLevelBvh release_top_level() && { return std::move(top_); }
     /// Mesh of each instance (index = InstanceId).
     const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
 
@@ -45,8 +49,8 @@ private:
 };
 
 /// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).
-InstancedAccel build_two_level_accel(const Scene& scene,
-                                     const ObjectBvhBuilder& object_builder = own_object_bvh_builder(),
-                                     const BuildSettings& top_settings = {.max_leaf_size = 1});
+InstancedAccel build_two_level_accel(
+    const Scene& scene, const ObjectBvhBuilder& object_builder = own_object_bvh_builder(),
+    const BuildSettings& top_settings = {.max_leaf_size = 1});
 
 }  // namespace rebraid

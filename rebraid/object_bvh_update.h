@@ -54,13 +54,13 @@ struct ObjectBvhUpdateSettings {
     /// runs auto_repair. 1 <= repair_sah_factor; at or above rebuild_sah_factor, never.
     double repair_sah_factor = 1.1;
     /// auto: the repair past repair_sah_factor: refit (none), treelet, restructure or rotate
-    /// (which needs a tree of one triangle per leaf, see `build`, and so traces slower from
-    /// the start). None by default: on both bench_update animations every repair cost more
-    /// time than the rebuilds it saved and left the mean SAH where refit plus rebuilds has
-    /// it (twist: refit-only auto 7.2 CPU ms/frame, 3 rebuilds, mean SAH 23.25; with treelet
-    /// repairs 14.6 ms, 3 rebuilds, 23.27; explode: 36.2 ms, 21 rebuilds, 33.29 against
-    /// 37.1-42.8 ms and 33.2-33.9 with any repair). A mesh whose refit SAH creeps up slowly
-    /// and whose rebuild is costly is where a repair can pay.
+    /// (in RotationLeafMode::pre_split it needs a tree of one triangle per leaf, see `build`,
+    /// which traces slower from the start). None by default: on both bench_update animations
+    /// every repair cost more time than the rebuilds it saved and left the mean SAH where
+    /// refit plus rebuilds has it (twist: refit-only auto 7.2 CPU ms/frame, 3 rebuilds, mean
+    /// SAH 23.25; with treelet repairs 14.6 ms, 3 rebuilds, 23.27; explode: 36.2 ms, 21
+    /// rebuilds, 33.29 against 37.1-42.8 ms and 33.2-33.9 with any repair). A mesh whose refit
+    /// SAH creeps up slowly and whose rebuild is costly is where a repair can pay.
     UpdateStrategy auto_repair = UpdateStrategy::refit;
     /// restructure: refit plus rotations (true) or refit only (false) before restructuring.
     /// Rotations repair local damage every frame, restructuring the subtrees they cannot

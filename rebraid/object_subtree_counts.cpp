@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 namespace rebraid {
 namespace {
 
@@ -18,11 +20,38 @@ std::uint32_t count_below(const ObjectBvh& bvh, NodeRef ref, std::vector<std::ui
     return sum;
 }
 
+/// The counts in one backward sweep over the node array, reading only the child references
+/// (a sequential pass, where the walk jumps around): valid when every inner child has a
+/// larger id than its parent, so its count is known when the parent needs it. Returns false,
+/// with `counts` partly filled, when a node breaks that order. Nodes the root does not reach
+/// (none, in a well-formed BVH) get counts too; nobody reads them.
+bool count_in_reverse_order(const ObjectBvh& bvh, std::vector<std::uint32_t>& counts) {
+    for (std::size_t n = bvh.nodes.size(); n-- > 0;) {
+        const WideNode& node = bvh.nodes[n];
+        std::uint32_t sum = 0;
+        for (int c = 0; c < kBvhWidth; ++c) {
+            const NodeRef child = node.children[c];
+            if (child.is_empty()) break;
+            if (child.is_leaf()) {
+                sum += child.prim_count();
+            } else {
+                if (child.node_id() <= n) return false;
+                sum += counts[child.node_id()];
+            }
+        }
+        counts[n] = sum;
+    }
+    return true;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> subtree_prim_counts(const ObjectBvh& bvh) {
     std::vector<std::uint32_t> counts(bvh.nodes.size(), 0);
-    count_below(bvh, bvh.root, counts);
+    if (bvh.root.is_inner() && !count_in_reverse_order(bvh, counts)) {
+        std::fill(counts.begin(), counts.end(), 0u);
+        count_below(bvh, bvh.root, counts);
+    }
     return counts;
 }
 
@@ -36,6 +65,17 @@ std::vector<std::vector<std::uint32_t>> subtree_prim_counts(const Scene& scene,
         if (used[m]) counts[m] = subtree_prim_counts(object_bvhs[m]);
     });
     return counts;
+}
+
+LazySubtreeCounts::LazySubtreeCounts(std::span<const ObjectBvh> object_bvhs)
+    : object_bvhs_(object_bvhs),
+      counts_(object_bvhs.size()),
+      computed_(std::make_unique<std::once_flag[]>(object_bvhs.size())) {}
+
+std::span<const std::uint32_t> LazySubtreeCounts::counts_of(std::uint32_t mesh) const {
+    std::call_once(computed_[mesh],
+                   [&] { counts_[mesh] = subtree_prim_counts(object_bvhs_[mesh]); });
+    return counts_[mesh];
 }
 
 }  // namespace rebraid

@@ -1,6 +1,6 @@
 #pragma once
 
-#include <algorithm>
+#include <bit>
 #include <cstdint>
 
 #include "rebraid/object_bvh.h"
@@ -11,56 +11,89 @@
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
-/// Asks the cache for the first and last line of `count` consecutive elements at `first`.
-template <class T>
-void prefetch_range(const T* first, std::uint32_t count) {
-    __builtin_prefetch(first);
-    __builtin_prefetch(reinterpret_cast<const char*>(first + count) - 1);
-}
+/// A hit-data prefetcher that does nothing (intersect_object_bvh_leaf_order's default).
+struct NoHitDataPrefetch {
+    void operator()(std::uint32_t) const {}
+};
 
-/// A leaf-data prefetcher that does nothing (intersect_object_bvh_leaf_order's default).
-struct NoLeafDataPrefetch {
-    void operator()(std::uint32_t, std::uint32_t) const {}
+/// The triangles of several leaves (leaf-order ranges of one BVH) gathered into lanes of
+/// group tests, 8 at a time: sibling leaves of 1-2 triangles share one SIMD test.
+class LeafTriangleLanes {
+public:
+    explicit LeafTriangleLanes(const TriangleVerts* triangles) : triangles_(triangles) {}
+
+    /// Adds the leaf's triangles; `on_full()` is called (to test and clear the lanes)
+    /// whenever all lanes are taken and more triangles remain.
+    template <class OnFull>
+    void add(NodeRef leaf, OnFull&& on_full) {
+        const TriangleVerts* first = triangles_ + leaf.first_prim();
+        const std::uint32_t count = leaf.prim_count();
+        if (count_ + count <= kTriangleGroupSize) {  // the common case: the leaf fits
+            for (std::uint32_t i = 0; i < count; ++i) lanes_[count_ + i] = first + i;
+            count_ += count;
+            return;
+        }
+        for (std::uint32_t i = 0; i < count; ++i) {
+            if (count_ == kTriangleGroupSize) on_full();
+            lanes_[count_++] = first + i;
+        }
+    }
+    std::uint32_t count() const { return count_; }
+    const TriangleVerts* const* lanes() const { return lanes_; }
+    /// Leaf-order position of the triangle in `lane`.
+    std::uint32_t position(std::uint32_t lane) const {
+        return std::uint32_t(lanes_[lane] - triangles_);
+    }
+    void clear() { count_ = 0; }
+
+private:
+    const TriangleVerts* triangles_;
+    const TriangleVerts* lanes_[kTriangleGroupSize];  // left uninitialised: filled as used
+    std::uint32_t count_ = 0;
 };
 
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
 /// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and hit.prim_id to the hit's
 /// position in leaf order (index into bvh.prim_ids and bvh.triangles), and returns true;
 /// leaves hit.instance_id to the caller.
-/// `prefetch_leaf_data(first, count)` is called for every leaf as it is stacked or visited,
-/// with its range in leaf order: the caller prefetches what it will look up for a hit there
-/// (ids in leaf order), so that lookup does not add a cache miss after traversal.
-template <class LeafDataPrefetch = NoLeafDataPrefetch>
+/// `prefetch_hit_data(position)` is called with the leaf-order position of every closer hit
+/// as it is found: the caller prefetches what it will look up for the final hit (ids in
+/// leaf order), so that the lookup's cache miss overlaps the rest of the traversal. (Asking
+/// for every visited leaf's ids instead cost more than the misses it hid.)
+template <class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray,
                                      Hit& hit, TraversalCounters* counters,
-                                     LeafDataPrefetch&& prefetch_leaf_data = {}) {
+                                     HitDataPrefetch&& prefetch_hit_data = {}) {
     const TriangleGroupRay group_ray(ray.org, ray.dir);
-    const TriangleVerts* triangles = bvh.triangles.data();
     bool found = false;
-    const auto visit_leaf = [&](NodeRef leaf) {
-        const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
-        prefetch_leaf_data(first, count);
-        for (std::uint32_t done = 0; done < count; done += kTriangleGroupSize) {
-            TriangleGroupHit group_hit;
-            if (intersect_triangle_group(triangles + first + done,
-                                         std::min(count - done, kTriangleGroupSize), group_ray,
-                                         ray.tnear, ray.tfar, group_hit)) {
-                ray.tfar = group_hit.t;
-                hit.t = group_hit.t;
-                hit.u = group_hit.u;
-                hit.v = group_hit.v;
-                hit.prim_id = first + done + group_hit.index;
-                found = true;
-            }
+    LeafTriangleLanes lanes(bvh.triangles.data());
+    const auto test_lanes = [&] {
+        TriangleGroupHit group_hit;
+        if (intersect_triangle_lanes(lanes.lanes(), lanes.count(), group_ray, ray.tnear, ray.tfar,
+                                     group_hit)) {
+            ray.tfar = group_hit.t;
+            hit.t = group_hit.t;
+            hit.u = group_hit.u;
+            hit.v = group_hit.v;
+            hit.prim_id = lanes.position(group_hit.index);
+            prefetch_hit_data(hit.prim_id);
+            found = true;
         }
-        if (counters) counters->triangles_tested += count;
+        lanes.clear();
+    };
+    // Sibling leaves together (LeafVisits::with_siblings): their triangles share tests.
+    const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
+        do {
+            const NodeRef leaf = refs[std::countr_zero(slots)];
+            slots &= slots - 1;
+            if (counters) counters->triangles_tested += leaf.prim_count();
+            lanes.add(leaf, test_lanes);
+        } while (slots);
+        test_lanes();
         return false;
     };
-    const auto prefetch_leaf = [&](NodeRef leaf) {
-        prefetch_range(triangles + leaf.first_prim(), leaf.prim_count());
-        prefetch_leaf_data(leaf.first_prim(), leaf.prim_count());
-    };
-    traverse_bvh(bvh.nodes.data(), start, ray, counters, visit_leaf, prefetch_leaf);
+    traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
+        bvh.nodes.data(), start, ray, counters, visit_leaves);
     return found;
 }
 
@@ -71,9 +104,8 @@ inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalR
                                  TraversalCounters* counters) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids.data();
-    const auto prefetch_prim_ids = [prim_ids](std::uint32_t first, std::uint32_t) {
-        // A leaf's primIDs (4 bytes a triangle) nearly always share the line of its first one.
-        __builtin_prefetch(prim_ids + first);
+    const auto prefetch_prim_ids = [prim_ids](std::uint32_t position) {
+        __builtin_prefetch(prim_ids + position);
     };
     if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,
                                          prefetch_prim_ids))
@@ -87,24 +119,27 @@ inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalR
 inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray,
                                 TraversalCounters* counters) {
     const TriangleGroupRay group_ray(ray.org, ray.dir);
-    const TriangleVerts* triangles = bvh.triangles.data();
-    const auto visit_leaf = [&](NodeRef leaf) {
-        const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
-        if (counters) counters->triangles_tested += count;
-        for (std::uint32_t done = 0; done < count; done += kTriangleGroupSize)
-            if (occluded_triangle_group(triangles + first + done,
-                                        std::min(count - done, kTriangleGroupSize), group_ray,
-                                        ray.tnear, ray.tfar))
-                return true;
-        return false;
+    LeafTriangleLanes lanes(bvh.triangles.data());
+    bool is_occluded = false;
+    const auto test_lanes = [&] {
+        is_occluded = is_occluded || occluded_triangle_lanes(lanes.lanes(), lanes.count(),
+                                                             group_ray, ray.tnear, ray.tfar);
+        lanes.clear();
     };
-    const auto prefetch_leaf = [triangles](NodeRef leaf) {
-        prefetch_range(triangles + leaf.first_prim(), leaf.prim_count());
+    const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
+        do {
+            const NodeRef leaf = refs[std::countr_zero(slots)];
+            slots &= slots - 1;
+            if (counters) counters->triangles_tested += leaf.prim_count();
+            lanes.add(leaf, test_lanes);
+        } while (slots && !is_occluded);
+        test_lanes();
+        return is_occluded;
     };
     // Any order: the first hit ends the query, and sorting the children costs more than the
     // nearer hits it would find first (measured on the shared scenes).
-    return traverse_bvh<TraversalOrder::any>(bvh.nodes.data(), start, ray, counters, visit_leaf,
-                                             prefetch_leaf);
+    return traverse_bvh<TraversalOrder::any, LeafVisits::with_siblings>(
+        bvh.nodes.data(), start, ray, counters, visit_leaves);
 }
 
 }  // namespace REBRAID_SIMD_NAMESPACE

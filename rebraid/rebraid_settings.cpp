@@ -29,6 +29,12 @@ void RebraidSettings::validate() const {
           instance_entry_cost, "must be finite and >= 0");
     check(std::isfinite(overlap_threshold) && overlap_threshold >= 0.0f, "overlap_threshold",
           overlap_threshold, "must be finite and >= 0");
+    if (budget_doublings > 16)
+        throw Error("RebraidSettings: budget_doublings " + std::to_string(budget_doublings) +
+                    " must be at most 16");
+    check(std::isfinite(budget_search_min_gain) && budget_search_min_gain >= 0.0f &&
+              budget_search_min_gain < 1.0f,
+          "budget_search_min_gain", budget_search_min_gain, "must be finite and in [0, 1)");
     if (estimate_levels > 8)
         throw Error("RebraidSettings: estimate_levels " + std::to_string(estimate_levels) +
                     " must be at most 8");

@@ -44,6 +44,15 @@ struct RebraidSettings {
     float budget_factor = 4.0f;
     /// Instanced primitives per extra BRef under BudgetRule::per_primitive (paper: 1000).
     float primitives_per_bref = 1000.0f;
+    /// Budget search (issue 10, budget policy): after the build at the rule's budget, build
+    /// again with the budget doubled, up to this many times, and keep the build of lowest
+    /// exact SAH cost (rebraid_cost_guard.h); stop doubling once a doubling lowers the cost by
+    /// less than `budget_search_min_gain`. 0 (the default) builds once, at the rule's budget.
+    /// Each step costs one more top-level build of twice the items.
+    std::uint32_t budget_doublings = 0;
+    /// Least cost reduction for the budget search to double again, relative to the part of
+    /// the SAH cost the top level itself makes (its nodes and the boxes entering objects).
+    float budget_search_min_gain = 0.01f;
     /// Hard cap on the extra BRefs, whatever the rule gives: the BRef array (40 bytes per
     /// BRef, plus as much again of build scratch) is allocated in full before the build
     /// starts, so a huge budget_factor must not turn into gigabytes. The default, 2^22 extra

@@ -1,6 +1,10 @@
 #include "rebraid/sah_aware_opening.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
+#include <array>
 #include <vector>
 
 #include "rebraid/binned_split.h"
@@ -10,6 +14,11 @@ namespace rebraid {
 namespace {
 
 constexpr double kChildrenPerNode = kBvhWidth - 1;
+
+/// Estimates over at least this many boxes run their independent parts as parallel tasks
+/// (the virtual builds with and without opening, and the groups below the first level):
+/// at the top of the tree they are the rule's longest serial stretches.
+constexpr std::size_t kParallelEstimateBoxes = 256;
 
 /// Half-area cost of the wide nodes a subtree over `count` boxes inside a box of half area
 /// `area` needs, when nothing is known about how they shrink: (count - 1) / 7 nodes, each
@@ -21,10 +30,11 @@ double unshrunk_cost(double area, std::size_t count) {
 /// Estimated half-area cost of the top-level nodes over `boxes` (weights 1; reordered): the
 /// wide node over all of them, made as the builder makes it (binned SAH splits of its
 /// largest child until it has kBvhWidth children), then `levels - 1` more wide levels the
-/// same way, then unshrunk_cost below.
-double estimate_top_cost(std::span<BuildPrim> boxes, const BuildSettings& build, int levels) {
+/// same way, then unshrunk_cost below. `info` is compute_range_info of `boxes`, which the
+/// caller has at hand (each group's comes from its split).
+double estimate_top_cost(std::span<BuildPrim> boxes, const RangeInfo& info,
+                         const BuildSettings& build, int levels) {
     if (boxes.size() <= 1) return 0.0;
-    const RangeInfo info = compute_range_info(boxes, build.parallel_threshold);
     const double area = info.bounds.half_area();
     if (levels == 0) return unshrunk_cost(area, boxes.size());
     struct Group {
@@ -32,13 +42,18 @@ double estimate_top_cost(std::span<BuildPrim> boxes, const BuildSettings& build,
         RangeInfo info;
         bool can_split = true;
     };
-    std::vector<Group> groups{{boxes, info, true}};
-    while (groups.size() < std::size_t(kBvhWidth)) {
+    // At most kBvhWidth groups: no allocation.
+    std::array<Group, kBvhWidth> groups;
+    std::size_t group_count = 1;
+    groups[0] = {boxes, info, true};
+    while (group_count < std::size_t(kBvhWidth)) {
         Group* largest = nullptr;
-        for (Group& g : groups)
+        for (std::size_t i = 0; i < group_count; ++i) {
+            Group& g = groups[i];
             if (g.can_split && g.boxes.size() > 1 &&
                 (!largest || g.info.bounds.half_area() > largest->info.bounds.half_area()))
                 largest = &g;
+        }
         if (!largest) break;
         const BinnedSplit split = find_binned_split(largest->boxes, largest->info, build);
         if (!split.is_valid()) {  // no plane separates the centroids
@@ -51,12 +66,21 @@ double estimate_top_cost(std::span<BuildPrim> boxes, const BuildSettings& build,
         const std::span<BuildPrim> left = largest->boxes.first(left_count);
         const std::span<BuildPrim> right = largest->boxes.subspan(left_count);
         *largest = {left, compute_range_info(left, build.parallel_threshold), true};
-        groups.push_back({right, compute_range_info(right, build.parallel_threshold), true});
+        groups[group_count++] = {right, compute_range_info(right, build.parallel_threshold), true};
     }
+    // The groups' costs in parallel for large ranges, summed in group order either way.
+    std::array<double, kBvhWidth> group_costs{};
+    auto group_cost = [&](std::size_t i) {
+        const Group& g = groups[i];
+        group_costs[i] = g.can_split ? estimate_top_cost(g.boxes, g.info, build, levels - 1)
+                                     : unshrunk_cost(g.info.bounds.half_area(), g.boxes.size());
+    };
+    if (boxes.size() >= kParallelEstimateBoxes && levels > 1)
+        tbb::parallel_for(std::size_t(0), group_count, group_cost);
+    else
+        for (std::size_t i = 0; i < group_count; ++i) group_cost(i);
     double cost = area;
-    for (const Group& g : groups)
-        cost += g.can_split ? estimate_top_cost(g.boxes, build, levels - 1)
-                            : unshrunk_cost(g.info.bounds.half_area(), g.boxes.size());
+    for (std::size_t i = 0; i < group_count; ++i) cost += group_costs[i];
     return cost;
 }
 
@@ -107,8 +131,24 @@ OpeningEstimate estimate_opening(std::span<const BuildPrim> prims,
     }
     if (estimate.opened == 0) return estimate;
     const int levels = int(settings.estimate_levels);
-    estimate.closed_cost = estimate_top_cost(closed, settings.build, levels) + closed_items;
-    estimate.opened_cost = estimate_top_cost(opened, settings.build, levels) + opened_items;
+    double closed_top = 0.0, opened_top = 0.0;
+    const std::size_t threshold = settings.build.parallel_threshold;
+    auto estimate_closed = [&] {
+        closed_top = estimate_top_cost(closed, compute_range_info(closed, threshold),
+                                       settings.build, levels);
+    };
+    auto estimate_opened = [&] {
+        opened_top = estimate_top_cost(opened, compute_range_info(opened, threshold),
+                                       settings.build, levels);
+    };
+    if (prims.size() >= kParallelEstimateBoxes) {
+        tbb::parallel_invoke(estimate_closed, estimate_opened);
+    } else {
+        estimate_closed();
+        estimate_opened();
+    }
+    estimate.closed_cost = closed_top + closed_items;
+    estimate.opened_cost = opened_top + opened_items;
     return estimate;
 }
 

@@ -13,6 +13,22 @@
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
+/// Byte offset inside a WideNode of the plane array of `axis` a ray enters boxes through
+/// (`is_far` false) or leaves them through (true), for a direction of sign `is_negative`
+/// along that axis: the lower planes first for a positive direction, the upper ones for a
+/// negative one.
+constexpr std::uint32_t slab_plane_offset(int axis, bool is_negative, bool is_far) {
+    // WideNode stores each axis's lower plane array followed by its upper one.
+    static_assert(offsetof(WideNode, upper_x) == offsetof(WideNode, lower_x) + 32 &&
+                  offsetof(WideNode, lower_y) == offsetof(WideNode, lower_x) + 64 &&
+                  offsetof(WideNode, upper_y) == offsetof(WideNode, lower_x) + 96 &&
+                  offsetof(WideNode, lower_z) == offsetof(WideNode, lower_x) + 128 &&
+                  offsetof(WideNode, upper_z) == offsetof(WideNode, lower_x) + 160);
+    const bool is_upper = is_negative != is_far;
+    return std::uint32_t(offsetof(WideNode, lower_x)) + 64u * std::uint32_t(axis) +
+           32u * std::uint32_t(is_upper);
+}
+
 /// A ray prepared for box tests: reciprocal direction with zero components replaced by tiny
 /// ones (so no 0 * inf appears) and, per axis, the byte offsets inside a WideNode of the
 /// plane arrays the ray enters (near) and leaves (far) a box through.
@@ -27,20 +43,13 @@ struct TraversalRay {
 
     TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far)
         : org(origin), dir(direction), tnear(t_near), tfar(t_far) {
-        // WideNode stores each axis's lower plane array followed by its upper one.
-        static_assert(offsetof(WideNode, upper_x) == offsetof(WideNode, lower_x) + 32 &&
-                      offsetof(WideNode, lower_y) == offsetof(WideNode, lower_x) + 64 &&
-                      offsetof(WideNode, upper_y) == offsetof(WideNode, lower_x) + 96 &&
-                      offsetof(WideNode, lower_z) == offsetof(WideNode, lower_x) + 128 &&
-                      offsetof(WideNode, upper_z) == offsetof(WideNode, lower_x) + 160);
-        constexpr std::uint32_t kLowerX = offsetof(WideNode, lower_x);
         for (int a = 0; a < 3; ++a) {
             const float d = direction[a];
             const float safe = std::fabs(d) < 1e-18f ? std::copysign(1e-18f, d) : d;
             rdir[a] = 1.0f / safe;
-            const std::uint32_t is_negative = rdir[a] >= 0.0f ? 0u : 1u;
-            near_offset[a] = kLowerX + 64u * std::uint32_t(a) + 32u * is_negative;
-            far_offset[a] = kLowerX + 64u * std::uint32_t(a) + 32u * (1u - is_negative);
+            const bool is_negative = !(rdir[a] >= 0.0f);
+            near_offset[a] = slab_plane_offset(a, is_negative, false);
+            far_offset[a] = slab_plane_offset(a, is_negative, true);
         }
     }
 };
@@ -61,8 +70,13 @@ struct NodeTestRay {
         for (int a = 0; a < 3; ++a) {
             org[a] = _mm256_set1_ps(ray.org[a]);
             rdir[a] = _mm256_set1_ps(ray.rdir[a]);
-            near_offset[a] = ray.near_offset[a];
-            far_offset[a] = ray.far_offset[a];
+            // Derived again rather than copied from ray.near_offset/far_offset: the ray was
+            // usually written just before, element by element, and the compiler reads those
+            // arrays back with wider loads, which cannot be forwarded from the narrower
+            // stores (a stall measured at every traversal start).
+            const bool is_negative = !(ray.rdir[a] >= 0.0f);
+            near_offset[a] = slab_plane_offset(a, is_negative, false);
+            far_offset[a] = slab_plane_offset(a, is_negative, true);
         }
     }
 };
@@ -135,6 +149,36 @@ enum class TraversalOrder {
     any,
 };
 
+/// Bit i set when child i of `node` is a leaf reference.
+inline unsigned leaf_slots(const WideNode& node) {
+#ifdef REBRAID_SIMD_AVX2
+    // The leaf flag is each reference's top bit, i.e. the sign bit of the 8 lanes.
+    static_assert(offsetof(WideNode, children) % 32 == 0 && NodeRef::kLeafBit == 0x80000000u);
+    return unsigned(
+        _mm256_movemask_ps(_mm256_load_ps(reinterpret_cast<const float*>(node.children))));
+#else
+    unsigned slots = 0;
+    for (int i = 0; i < kBvhWidth; ++i) slots |= unsigned(node.children[i].is_leaf()) << i;
+    return slots;
+#endif
+}
+
+/// How traverse_bvh hands leaves to its visitor.
+enum class LeafVisits {
+    /// A leaf is a child like an inner node: stacked and visited nearest first, one at a
+    /// time, as visit_leaf(NodeRef leaf). For costly leaves (top-level items, each entering
+    /// an object BVH), where visiting the nearest first saves whole object traversals.
+    one_by_one,
+    /// At an inner node, the leaf children the ray enters are handed over together, before
+    /// the node's inner children, as visit_leaf(const NodeRef* refs, unsigned slots) (bit i
+    /// of slots selects refs[i]); a leaf start arrives as visit_leaf(&start, 1). For leaves
+    /// of a few triangles: one SIMD test then serves the triangles of several sibling
+    /// leaves, where one test per leaf cost a whole test for one or two triangles (the
+    /// builder's leaves hold 1.3-2 triangles on average), and the hits found shorten the
+    /// ray before any inner sibling is entered.
+    with_siblings,
+};
+
 /// Asks the cache for the node `ref` names (all four lines of its 224 bytes).
 inline void prefetch_node(const WideNode* nodes, NodeRef ref) {
     const char* base = reinterpret_cast<const char*>(nodes + ref.node_id());
@@ -148,17 +192,23 @@ struct NoLeafPrefetch {
 };
 
 /// Depth-first traversal of the wide BVH `nodes` from `start` (any node, or a leaf
-/// reference). `visit_leaf(NodeRef leaf)` tests a leaf's primitives, shrinking ray.tfar on
-/// hits, and returns true to stop traversal (any-hit queries). Returns whether traversal was
-/// stopped by visit_leaf.
-/// `prefetch_leaf(NodeRef leaf)` is called for hit leaves that wait on the stack, and every
-/// stacked inner node is prefetched: on scenes larger than the caches, the misses of the
-/// siblings then overlap with the work on the nearest child instead of following it.
-template <TraversalOrder order = TraversalOrder::nearest_first, class LeafVisitor,
+/// reference). `visit_leaf` tests leaves' primitives (one leaf or several, see LeafVisits),
+/// shrinking ray.tfar on hits, and returns true to stop traversal (any-hit queries). Returns
+/// whether traversal was stopped by visit_leaf.
+/// `prefetch_leaf(NodeRef leaf)` is called for hit leaves that wait on the stack (only with
+/// LeafVisits::one_by_one), and every stacked inner node is prefetched: on scenes larger
+/// than the caches, the misses of the siblings then overlap with the work on the nearest
+/// child instead of following it.
+template <TraversalOrder order = TraversalOrder::nearest_first,
+          LeafVisits leaf_visits = LeafVisits::one_by_one, class LeafVisitor,
           class LeafPrefetcher = NoLeafPrefetch>
 bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
                   TraversalCounters* counters, LeafVisitor&& visit_leaf,
                   LeafPrefetcher&& prefetch_leaf = {}) {
+    constexpr bool kWithSiblings = leaf_visits == LeafVisits::with_siblings;
+    if constexpr (kWithSiblings) {
+        if (start.is_leaf()) return visit_leaf(&start, 1u);
+    }
     // A stack entry packs a child's entry distance (high half, as float bits) with its
     // reference (low half); for the non-negative distances of valid rays, comparing entries
     // as integers compares distances. The array is left uninitialised on purpose: clearing
@@ -198,6 +248,23 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
 #else
             unsigned mask = intersect_node(node, ray, distances);
 #endif
+            if constexpr (kWithSiblings) {
+                const unsigned leaf_mask = mask & leaf_slots(node);
+                if (leaf_mask != 0) {
+                    if (visit_leaf(node.children, leaf_mask)) return true;
+                        // Their hits shortened the ray: keep the inner children still entered
+                        // before its end (the test a stacked child gets when popped).
+#ifdef REBRAID_SIMD_AVX2
+                    const unsigned entered = unsigned(_mm256_movemask_ps(
+                        _mm256_cmp_ps(entry, _mm256_set1_ps(ray.tfar), _CMP_LE_OQ)));
+#else
+                    unsigned entered = 0;
+                    for (int i = 0; i < kBvhWidth; ++i)
+                        entered |= unsigned(distances[i] <= ray.tfar) << i;
+#endif
+                    mask &= ~leaf_mask & entered;
+                }
+            }
             if (mask == 0) {
                 current = NodeRef::empty();
                 break;
@@ -245,7 +312,9 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
             } while (mask);
             current = entry_ref(stack[--stack_size]);
         }
-        if (current.is_leaf() && visit_leaf(current)) return true;
+        if constexpr (!kWithSiblings) {
+            if (current.is_leaf() && visit_leaf(current)) return true;
+        }
         // Pop the nearest stacked subtree that may still hold a closer hit.
         for (;;) {
             if (stack_size == 0) return false;

@@ -60,19 +60,21 @@ inline __m256 dot(const Vec3x8& a, const Vec3x8& b) {
 }
 
 /// The corners of up to 8 triangles turned from the array-of-structures storage into one
-/// lane per triangle. Lane i holds triangle min(i, count - 1): surplus lanes repeat the last
-/// triangle (no read past the group) and are masked off by the caller; for groups of at most
-/// four (the common leaf), lanes 4..7 are zero and only half the rows are loaded.
+/// lane per triangle; `triangle_of(i)` names lane i's triangle (i < count). Lane i holds
+/// triangle min(i, count - 1): surplus lanes repeat the last triangle (no read past the
+/// group) and are masked off by the caller; for groups of at most four (the common case),
+/// lanes 4..7 are zero and only half the rows are loaded.
 /// Each 16-byte row load takes a corner's x, y, z plus a neighbouring float; corner 2 is read
 /// starting one float early (v1.z) so no load runs past the triangle's 36 bytes.
 struct GroupCorners {
     static_assert(sizeof(TriangleVerts) == 36, "rows are read at fixed float offsets");
     Vec3x8 corner[3];
 
-    GroupCorners(const TriangleVerts* tris, std::uint32_t count) {
+    template <class TriangleOfLane>
+    GroupCorners(TriangleOfLane&& triangle_of, std::uint32_t count) {
         const float* row[kTriangleGroupSize];
         for (std::uint32_t i = 0; i < kTriangleGroupSize; ++i)
-            row[i] = &tris[std::min(i, count - 1)].v0.x;
+            row[i] = &triangle_of(std::min(i, count - 1))->v0.x;
         const bool is_half = count <= 4;
         // Rows of lane pairs (j, j + 4) share a register: a 4x4 transpose per 128-bit half
         // then yields lanes in order 0..7.
@@ -108,9 +110,8 @@ struct GroupTest {
     unsigned mask = 0;
     __m256 w1, w2, sum, t;
 
-    GroupTest(const TriangleVerts* tris, std::uint32_t count, const TriangleGroupRay& ray,
+    GroupTest(const GroupCorners& corners, std::uint32_t count, const TriangleGroupRay& ray,
               float tnear, float tfar) {
-        const GroupCorners corners(tris, count);
         const Vec3x8 org{ray.org[0], ray.org[1], ray.org[2]};
         const Vec3x8 a = corners.corner[0] - org;
         const Vec3x8 b = corners.corner[1] - org;
@@ -145,16 +146,8 @@ struct GroupTest {
     }
 };
 
-}  // namespace triangle_group_detail
-
-/// Closest hit among the `count` (1..8) consecutive triangles at `tris` with
-/// tnear <= t <= tfar; on a tie the lower index wins. Returns false when none is hit.
-inline bool intersect_triangle_group(const TriangleVerts* tris, std::uint32_t count,
-                                     const TriangleGroupRay& ray, float tnear, float tfar,
-                                     TriangleGroupHit& hit) {
-    using namespace triangle_group_detail;
-    const GroupTest test(tris, count, ray, tnear, tfar);
-    if (test.mask == 0) return false;
+/// The closest lane of a test with at least one hit; on a tie the lower lane wins.
+inline TriangleGroupHit closest_lane(const GroupTest& test) {
     alignas(32) float t[kTriangleGroupSize], w1[kTriangleGroupSize], w2[kTriangleGroupSize],
         sum[kTriangleGroupSize];
     _mm256_store_ps(t, test.t);
@@ -168,14 +161,52 @@ inline bool intersect_triangle_group(const TriangleVerts* tris, std::uint32_t co
     _mm256_store_ps(w2, test.w2);
     _mm256_store_ps(sum, test.sum);
     const float inv_sum = 1.0f / sum[best];
-    hit = {best, t[best], w1[best] * inv_sum, w2[best] * inv_sum};
+    return {best, t[best], w1[best] * inv_sum, w2[best] * inv_sum};
+}
+
+}  // namespace triangle_group_detail
+
+/// Closest hit among the `count` (1..8) consecutive triangles at `tris` with
+/// tnear <= t <= tfar; on a tie the lower index wins. Returns false when none is hit.
+inline bool intersect_triangle_group(const TriangleVerts* tris, std::uint32_t count,
+                                     const TriangleGroupRay& ray, float tnear, float tfar,
+                                     TriangleGroupHit& hit) {
+    using namespace triangle_group_detail;
+    const GroupCorners corners([tris](std::uint32_t i) { return tris + i; }, count);
+    const GroupTest test(corners, count, ray, tnear, tfar);
+    if (test.mask == 0) return false;
+    hit = closest_lane(test);
+    return true;
+}
+
+/// Same as intersect_triangle_group for `count` (1..8) triangles from anywhere, `lanes[i]`
+/// pointing at the i-th (e.g. the triangles of several small leaves, tested together);
+/// hit.index is the lane.
+inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                                     const TriangleGroupRay& ray, float tnear, float tfar,
+                                     TriangleGroupHit& hit) {
+    using namespace triangle_group_detail;
+    const GroupCorners corners([lanes](std::uint32_t i) { return lanes[i]; }, count);
+    const GroupTest test(corners, count, ray, tnear, tfar);
+    if (test.mask == 0) return false;
+    hit = closest_lane(test);
     return true;
 }
 
 /// True when the ray hits any of the `count` (1..8) triangles at `tris` within [tnear, tfar].
 inline bool occluded_triangle_group(const TriangleVerts* tris, std::uint32_t count,
                                     const TriangleGroupRay& ray, float tnear, float tfar) {
-    return triangle_group_detail::GroupTest(tris, count, ray, tnear, tfar).mask != 0;
+    using namespace triangle_group_detail;
+    const GroupCorners corners([tris](std::uint32_t i) { return tris + i; }, count);
+    return GroupTest(corners, count, ray, tnear, tfar).mask != 0;
+}
+
+/// Same as occluded_triangle_group for triangles from anywhere (see intersect_triangle_lanes).
+inline bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                                    const TriangleGroupRay& ray, float tnear, float tfar) {
+    using namespace triangle_group_detail;
+    const GroupCorners corners([lanes](std::uint32_t i) { return lanes[i]; }, count);
+    return GroupTest(corners, count, ray, tnear, tfar).mask != 0;
 }
 
 #else  // portable path: the scalar test, one triangle after the other
@@ -207,6 +238,30 @@ inline bool occluded_triangle_group(const TriangleVerts* tris, std::uint32_t cou
     for (std::uint32_t i = 0; i < count; ++i) {
         float t, u, v;
         if (intersect_triangle(tris[i], ray.org, ray.dir, tnear, tfar, t, u, v)) return true;
+    }
+    return false;
+}
+
+inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                                     const TriangleGroupRay& ray, float tnear, float tfar,
+                                     TriangleGroupHit& hit) {
+    bool found = false;
+    for (std::uint32_t i = 0; i < count; ++i) {
+        float t, u, v;
+        if (intersect_triangle(*lanes[i], ray.org, ray.dir, tnear, tfar, t, u, v) &&
+            (!found || t < hit.t)) {
+            hit = {i, t, u, v};
+            found = true;
+        }
+    }
+    return found;
+}
+
+inline bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                                    const TriangleGroupRay& ray, float tnear, float tfar) {
+    for (std::uint32_t i = 0; i < count; ++i) {
+        float t, u, v;
+        if (intersect_triangle(*lanes[i], ray.org, ray.dir, tnear, tfar, t, u, v)) return true;
     }
     return false;
 }

@@ -16,6 +16,7 @@
 #include "cli_runner.h"
 #include "gltf_test_files.h"
 #include "rebraid/mesh_generators.h"
+#include "rebraid/object_bvh_update.h"
 
 namespace {
 
@@ -92,6 +93,23 @@ TEST(AnimateCommand, JsonHasOneObjectPerMethodWithTheSummaryKeys) {
     EXPECT_EQ(methods, expected);
 }
 
+TEST(AnimateCommand, RunsEveryUpdateStrategyByDefault) {
+    const fs::path dir = scratch_dir("strategies");
+    const CommandResult result = test::run_rebraid_in(
+        dir, {"animate", "--static", small_static_scene_file("strategies"), "--frames", "1",
+              "--copies", "1", "--width", "8", "--height", "8", "--top", "rebraid", "--no-embree",
+              "--static-builder", "embree-high", "--json"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    std::set<std::string> methods;
+    for (const nlohmann::json& entry : nlohmann::json::parse(result.out))
+        methods.insert(entry["method"].get<std::string>());
+    std::set<std::string> expected;
+    for (rebraid::UpdateStrategy strategy : rebraid::kUpdateStrategies)
+        expected.insert("rebraid+" + std::string(rebraid::update_strategy_name(strategy)));
+    EXPECT_EQ(methods, expected);
+    EXPECT_TRUE(expected.count("rebraid+treelet"));
+}
+
 TEST(AnimateCommand, CsvHasOneRowPerFrameAndMethod) {
     const fs::path dir = scratch_dir("csv");
     const fs::path csv = dir / "frames.csv";
@@ -145,6 +163,7 @@ TEST(AnimateCommand, BadOptionsExitWithOneAndAMessage) {
         {{"--dynamic", (dir / "missing.glb").string()}, "missing.glb"},
         {{"--static", (dir / "nothing.glb").string()}, "nothing.glb"},
         {{"--size", "2"}, "size_fraction"},
+        {{"--static-builder", "quick"}, "quick"},
     };
     const std::string static_scene = small_static_scene_file("bad");
     for (const auto& [arguments, message] : cases) {

@@ -21,6 +21,7 @@
 #include "cli_runner.h"
 #include "embree_glue/embree_reference.h"
 #include "gltf_test_files.h"
+#include "own_structures.h"
 #include "rebraid/error.h"
 #include "rebraid/flat_accel.h"
 #include "rebraid/gltf_scene.h"
@@ -242,21 +243,13 @@ Mesh degenerate_mesh() {
     return mesh;
 }
 
-/// Every structure the project has, built over `scene`.
-std::vector<std::pair<std::string, std::unique_ptr<Accel>>> every_structure(const Scene& scene) {
-    std::vector<std::pair<std::string, std::unique_ptr<Accel>>> structures;
+/// Every structure the project has, built over `scene`: Embree's two and our own.
+test::NamedAccels every_structure(const Scene& scene) {
+    test::NamedAccels structures;
     structures.emplace_back("embree-flat", std::make_unique<glue::EmbreeFlatAccel>(scene));
     structures.emplace_back("embree-instanced",
                             std::make_unique<glue::EmbreeInstancedAccel>(scene));
-    structures.emplace_back("flat", std::make_unique<FlatAccel>(scene));
-    structures.emplace_back("twolevel",
-                            std::make_unique<InstancedAccel>(build_two_level_accel(scene)));
-    structures.emplace_back("rebraid",
-                            std::make_unique<InstancedAccel>(build_rebraid_accel(scene)));
-    structures.emplace_back(
-        "rebraid-open-everything",
-        std::make_unique<InstancedAccel>(build_rebraid_accel(
-            scene, own_object_bvh_builder(), {.open_threshold = 0.0f, .budget_factor = 100.0f})));
+    for (auto& named : test::own_structures(scene, 100.0f)) structures.push_back(std::move(named));
     return structures;
 }
 

@@ -230,6 +230,18 @@ TEST(CliStats, JsonMatchesDefaultSceneForBothEmbreeStructures) {
     }
 }
 
+TEST(CliStats, DefaultNamesTheBuiltInSceneAsAnOmittedSceneDoes) {
+    const CommandResult omitted = run_rebraid({"stats", "--json", "--accel", "twolevel"});
+    const CommandResult named = run_rebraid({"stats", "default", "--json", "--accel", "twolevel"});
+    ASSERT_EQ(omitted.exit_code, 0) << omitted.err;
+    ASSERT_EQ(named.exit_code, 0) << named.err;
+    const nlohmann::json a = nlohmann::json::parse(omitted.out);
+    const nlohmann::json b = nlohmann::json::parse(named.out);
+    EXPECT_EQ(a.at("structure_hash"), b.at("structure_hash"));
+    EXPECT_EQ(b.at("instances").get<std::uint64_t>(),
+              rebraid::make_default_scene().instances.size());
+}
+
 TEST(CliStats, TextNamesEveryCount) {
     const fs::path scene = write_two_quads_gltf(scratch_dir());
     const CommandResult result = run_rebraid({"stats", scene.string()});

@@ -65,8 +65,7 @@ void expect_matches_embree_flat(const DynamicScene& dynamic, const Accel& accel,
 
 TEST(IncrementalTopLevel, MatchesEmbreeFlatOnTheDeformedFrameForEveryStrategy) {
     const auto object = small_twisting_object();
-    for (UpdateStrategy strategy : {UpdateStrategy::rebuild, UpdateStrategy::refit,
-                                    UpdateStrategy::rotate, UpdateStrategy::automatic}) {
+    for (UpdateStrategy strategy : kUpdateStrategies) {
         SCOPED_TRACE(std::string(update_strategy_name(strategy)));
         DynamicScene dynamic(static_scene(), *object, {.copy_count = 3});
         DynamicSceneAccel accel(dynamic, incremental_settings(strategy));
@@ -224,6 +223,53 @@ TEST(IncrementalTopLevel, RejectsAFrameBeforeTheStaticBuildAndStaticDynamicInsta
     const std::vector<InstanceId> past_end{InstanceId(scene.instances.size())};
     EXPECT_THROW(incremental.build_frame(scene, object_bvhs, past_end), Error);
     EXPECT_THROW(IncrementalTopLevel({}, {.max_cut_pieces = 0}), Error);
+}
+
+/// True when the two tops have the same arrays, bit for bit.
+bool same_top(const TopLevelBvh& a, const TopLevelBvh& b) {
+    if (a.nodes.size() != b.nodes.size() || a.items.size() != b.items.size() ||
+        a.item_bounds != b.item_bounds || a.root != b.root || !(a.bounds == b.bounds))
+        return false;
+    for (std::size_t i = 0; i < a.items.size(); ++i)
+        if (a.items[i].instance_id != b.items[i].instance_id ||
+            a.items[i].object_node != b.items[i].object_node)
+            return false;
+    return std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(WideNode)) == 0;
+}
+
+TEST(IncrementalTopLevel, ReusingThePreviousTopGivesTheSameFrame) {
+    const auto object = small_twisting_object();
+    DynamicScene dynamic(static_scene(), *object, {.copy_count = 3});
+    const Scene& scene = dynamic.scene();
+    std::vector<ObjectBvh> object_bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    std::vector<InstanceId> static_ids;
+    for (std::size_t i = 0; i < dynamic.static_instance_count(); ++i)
+        static_ids.push_back(InstanceId(i));
+    IncrementalTopLevel incremental;
+    incremental.build_static(scene, object_bvhs, static_ids);
+    const std::vector<InstanceId>& changing = dynamic.changing_instances();
+    TopLevelBvh previous;  // empty on the first frame: the static top is copied
+    for (int frame = 1; frame <= kFrameCount; ++frame) {
+        dynamic.pose(static_cast<float>(frame) * kTimeStep);
+        for (MeshId mesh_id : dynamic.dynamic_meshes())
+            object_bvhs[mesh_id] = build_object_bvh(scene.meshes[mesh_id]);
+        const IncrementalTopBuild fresh = incremental.build_frame(scene, object_bvhs, changing);
+        IncrementalTopBuild reused =
+            incremental.build_frame(scene, object_bvhs, changing, std::move(previous));
+        ASSERT_FALSE(fresh.is_full_rebraid);
+        EXPECT_TRUE(same_top(fresh.top, reused.top)) << "frame " << frame;
+        EXPECT_EQ(fresh.brefs, reused.brefs);
+        previous = std::move(reused.top);
+    }
+    // A top that does not start with the static one is refused.
+    TopLevelBvh other = build_rebraid(scene, object_bvhs).top;
+    other.nodes.resize(incremental.static_top().nodes.size() + 1, other.nodes.front());
+    other.items.resize(incremental.static_top().items.size() + 1, other.items.front());
+    other.item_bounds.resize(other.items.size(), other.item_bounds.front());
+    EXPECT_THROW(incremental.build_frame(scene, object_bvhs, changing, std::move(other)), Error);
+    TopLevelBvh shorter = incremental.static_top();
+    shorter.nodes.pop_back();
+    EXPECT_THROW(incremental.build_frame(scene, object_bvhs, changing, std::move(shorter)), Error);
 }
 
 TEST(StaticTopCut, OpensOnlyWhereDynamicBoxesOverlapAndWithinTheLimit) {

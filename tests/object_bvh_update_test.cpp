@@ -62,12 +62,15 @@ std::vector<StrategyCase> strategy_cases() {
             settings.restructure_rotates = false;
         }
         if (strategy == UpdateStrategy::rotate) {
+            // The default is split_merge, lazy, two moves per node; Kopta's schedule (pre-split,
+            // one move, every node) and a lazy pre-split pass with three moves besides it.
+            settings.rotation.leaf_mode = RotationLeafMode::pre_split;
+            settings.rotation.min_growth_to_search = 0.0f;
+            settings.rotation.max_rotations_per_node = 1;
+            cases.push_back({"rotate_pre_split_eager", settings});
             settings.rotation.min_growth_to_search = 0.01f;
             settings.rotation.max_rotations_per_node = 3;
-            cases.push_back({"rotate_lazy_three_per_node", settings});
-            settings.rotation = {};
-            settings.rotation.leaf_mode = RotationLeafMode::split_merge;
-            cases.push_back({"rotate_split_merge", settings});
+            cases.push_back({"rotate_pre_split_lazy_three_per_node", settings});
             settings.rotation = {};
         }
         if (strategy == UpdateStrategy::automatic) {
@@ -169,18 +172,25 @@ TEST(BvhRotator, RotationsFromTheRestPoseKeepTheTree) {
     // With nothing moved, a pass only refits and applies strictly improving moves: the
     // triangles and the root box stay the same.
     const Mesh rest = rest_mesh();
-    ObjectBvh bvh = build_object_bvh(rest, {.max_leaf_size = 1});
-    const double built_sah = object_bvh_sah(bvh);
-    BvhRotator rotator;
-    const RotationPassStats stats = rotator.refit_and_rotate(rest, bvh);
-    EXPECT_LE(stats.sah, built_sah * (1.0 + 1e-6));
-    expect_valid(rest, bvh);
+    for (RotationLeafMode mode : {RotationLeafMode::pre_split, RotationLeafMode::split_merge}) {
+        ObjectBvh bvh = build_object_bvh(
+            rest, {.max_leaf_size = mode == RotationLeafMode::pre_split ? 1u : 4u});
+        const double built_sah = object_bvh_sah(bvh);
+        BvhRotator rotator;
+        RotationSettings settings;
+        settings.leaf_mode = mode;
+        const RotationPassStats stats = rotator.refit_and_rotate(rest, bvh, settings);
+        EXPECT_LE(stats.sah, built_sah * (1.0 + 1e-6));
+        expect_valid(rest, bvh);
+    }
 }
 
 TEST(BvhRotator, RespectsTheDepthLimit) {
     const Mesh rest = unwelded(rest_mesh());
     ObjectBvh bvh = build_object_bvh(rest, {.max_leaf_size = 1});
     RotationSettings settings;
+    settings.leaf_mode = RotationLeafMode::pre_split;
+    settings.min_growth_to_search = 0.0f;  // every node, every pass
     settings.max_depth = 6;
     settings.max_rotations_per_node = 4;
     BvhRotator rotator;
@@ -237,10 +247,11 @@ TEST(SelectiveRestructurer, RebuildsScatteredPreSplitSubtreesAfterRotations) {
     const Mesh rest = unwelded(rest_mesh());
     ObjectBvh bvh = build_object_bvh(rest, {.max_leaf_size = 1});
     BvhRotator rotator;
+    const RotationSettings pre_split{.leaf_mode = RotationLeafMode::pre_split};
     for (int frame = 1; frame <= 3; ++frame)
-        rotator.refit_and_rotate(shuffled(rest, 0.1f * frame), bvh);
+        rotator.refit_and_rotate(shuffled(rest, 0.1f * frame), bvh, pre_split);
     const Mesh mesh = shuffled(rest, 0.5f);
-    const double rotated_sah = rotator.refit_and_rotate(mesh, bvh).sah;
+    const double rotated_sah = rotator.refit_and_rotate(mesh, bvh, pre_split).sah;
     SelectiveRestructurer restructurer;
     RestructureSettings settings;
     settings.min_subtree_prims = 16;
@@ -310,6 +321,8 @@ TEST(ObjectBvhUpdater, AutoRepairsOnlyBetweenItsTwoFactors) {
         settings.repair_sah_factor = 1.02;
         settings.rebuild_sah_factor = 1e9;
         settings.restructure.min_subtree_prims = 16;
+        // Pre-split rotations also check the first update's rebuild to one triangle per leaf.
+        settings.rotation.leaf_mode = RotationLeafMode::pre_split;
         std::vector<ObjectBvhUpdateReport> reports;
         animate(rest, settings, 12, &reports);
         int repairs = 0;
@@ -355,7 +368,9 @@ TEST(ObjectBvhUpdater, AutoBelowTheRepairFactorIsExactlyARefit) {
 TEST(ObjectBvhUpdater, RotatePreSplitRebuildsWithOneTrianglePerLeaf) {
     const Mesh rest = rest_mesh();
     ObjectBvh bvh = build_object_bvh(rest);
-    ObjectBvhUpdater updater(with_strategy(UpdateStrategy::rotate));
+    ObjectBvhUpdateSettings settings = with_strategy(UpdateStrategy::rotate);
+    settings.rotation.leaf_mode = RotationLeafMode::pre_split;
+    ObjectBvhUpdater updater(settings);
     EXPECT_EQ(updater.rebuild_settings().max_leaf_size, 1u);
     EXPECT_EQ(updater.update(rest, bvh).applied, UpdateStrategy::rebuild);
     EXPECT_EQ(updater.update(deformed(rest, 0.5f), bvh).applied, UpdateStrategy::rotate);

@@ -16,6 +16,7 @@
 #include "embree_glue/embree_reference.h"
 #include "fuzz/answer_check.h"
 #include "fuzz/fuzzed_scene.h"
+#include "own_structures.h"
 #include "rebraid/flat_accel.h"
 #include "rebraid/instanced_accel.h"
 #include "rebraid/random.h"
@@ -51,16 +52,7 @@ void check_seed(std::uint64_t seed, const fuzz::FuzzedCaseLimits& limits, SeedRu
     ++summary.checked;
     const Scene& scene = fuzzed.scene;
     const glue::EmbreeFlatAccel reference(scene);
-    std::vector<std::pair<std::string, std::unique_ptr<Accel>>> structures;
-    structures.emplace_back("flat", std::make_unique<FlatAccel>(scene));
-    structures.emplace_back("twolevel",
-                            std::make_unique<InstancedAccel>(build_two_level_accel(scene)));
-    structures.emplace_back("rebraid",
-                            std::make_unique<InstancedAccel>(build_rebraid_accel(scene)));
-    structures.emplace_back(
-        "rebraid-open-everything",
-        std::make_unique<InstancedAccel>(build_rebraid_accel(
-            scene, own_object_bvh_builder(), {.open_threshold = 0.0f, .budget_factor = 64.0f})));
+    const test::NamedAccels structures = test::own_structures(scene, 64.0f);
     for (const auto& [name, accel] : structures) {
         const std::string disagreement =
             fuzz::compare_answers(scene, reference, *accel, fuzzed.rays);

@@ -4,7 +4,9 @@
 
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <cstdint>
 
 #include "embree_glue/embree_reference.h"
 #include "hit_comparison.h"
@@ -191,6 +193,35 @@ TEST(RebraidBuilder, SameStructureOnOneTwoAndEightThreads) {
         const std::uint64_t one = rebraid_hash(named.scene, settings, 1);
         EXPECT_EQ(one, rebraid_hash(named.scene, settings, 2));
         EXPECT_EQ(one, rebraid_hash(named.scene, settings, 8));
+    }
+}
+
+TEST(RebraidBuilder, SameStructureForAnyTaskGranularity) {
+    // Tasks are numbered into the tree by one layout pass, so how finely the build is cut
+    // into tasks must not change a bit of it (nor must one thread, which spawns none).
+    tbb::global_control allow_two(tbb::global_control::max_allowed_parallelism, 2);
+    const Scene scene = test::make_overlap_scene(300, 5);
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    auto hash_with = [&](std::size_t task_threshold, std::size_t parallel_threshold, int threads) {
+        RebraidSettings settings;
+        settings.build.task_threshold = task_threshold;
+        settings.build.parallel_threshold = parallel_threshold;
+        std::uint64_t hash = 0;
+        tbb::task_arena arena(threads);
+        arena.execute([&] {
+            const InstancedAccel accel(scene, bvhs, build_rebraid(scene, bvhs, settings).top, {});
+            hash = *accel.stats().structure_hash;
+        });
+        return hash;
+    };
+    // A low parallel threshold puts large children last in the numbering (as
+    // grow_wide_subtree does), which the layout pass must reproduce.
+    for (const std::size_t parallel_threshold : {std::size_t(64), std::size_t(8192)}) {
+        SCOPED_TRACE(parallel_threshold);
+        const std::uint64_t serial = hash_with(1u << 30, parallel_threshold, 1);
+        EXPECT_EQ(serial, hash_with(1, parallel_threshold, 2));
+        EXPECT_EQ(serial, hash_with(16, parallel_threshold, 2));
+        EXPECT_EQ(serial, hash_with(200, parallel_threshold, 2));
     }
 }
 

@@ -6,6 +6,7 @@
 
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "embree_glue/embree_reference.h"
 #include "hit_comparison.h"
 #include "reachability.h"
+#include "rebraid/bref_budget.h"
 #include "rebraid/default_scene.h"
 #include "rebraid/error.h"
 #include "rebraid/gltf_scene.h"
@@ -54,6 +56,11 @@ std::vector<NamedSettings> new_rule_variants() {
           .opening_rule = OpeningRule::overlap,
           .overlap_threshold = 0.1f}},
         {"extent-leaves", {.open_threshold = 0.0f, .budget_factor = 1000.0f, .open_leaves = true}},
+        {"extent-vertices", {.bounds_rule = BRefBoundsRule::transformed_vertices}},
+        {"sah-vertices-budget-search",
+         {.budget_doublings = 3,
+          .bounds_rule = BRefBoundsRule::transformed_vertices,
+          .opening_rule = OpeningRule::sah}},
         {"sah-leaves-children",
          {.open_threshold = 0.0f,
           .budget_factor = 50.0f,
@@ -199,12 +206,10 @@ TEST(RebraidOpening, SahRuleOpensWhereObjectsOverlap) {
     }
 }
 
-/// SAH times the root's half area: the expected work of rays through a fixed region. The
-/// SAH alone divides by the structure's own root box, which tighter BRef bounds shrink, so
-/// it can rise while every ray does less work.
+/// The SAH: every structure over the same instances divides by the same scene box (README
+/// "SAH"), so it compares the expected work of rays through one fixed region.
 double absolute_cost(const Scene& scene, const std::vector<ObjectBvh>& bvhs, TopLevelBvh top) {
-    const double root_area = top.bounds.half_area();
-    return sah_of(scene, bvhs, std::move(top)) * root_area;
+    return sah_of(scene, bvhs, std::move(top));
 }
 
 TEST(RebraidOpening, SahRuleNeverAboveTwoLevelOnRotatedInstances) {
@@ -235,6 +240,38 @@ TEST(RebraidOpening, SahRuleNeverAboveTwoLevelOnRotatedInstances) {
             EXPECT_LE(cost, two_level * 1.005);
         }
     }
+}
+
+TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
+    const Scene scene = test::make_overlap_scene(120, 5);
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
+        SCOPED_TRACE(int(rule));
+        const RebraidSettings base{.opening_rule = rule};
+        RebraidSettings searching = base;
+        searching.budget_doublings = 3;
+        searching.budget_search_min_gain = 0.0f;  // try every doubling
+        const RebraidBuild searched = build_rebraid(scene, bvhs, searching);
+        const double searched_sah = absolute_cost(scene, bvhs, searched.top);
+        for (const float factor : {4.0f, 8.0f, 16.0f, 32.0f}) {
+            RebraidSettings fixed = base;
+            fixed.budget_factor = factor;
+            const double fixed_sah =
+                absolute_cost(scene, bvhs, build_rebraid(scene, bvhs, fixed).top);
+            EXPECT_LE(searched_sah, fixed_sah * (1.0 + 1e-6)) << "budget factor " << factor;
+        }
+        EXPECT_GE(searched.budget,
+                  bref_budget(base, scene.instances.size(), scene.instanced_triangle_count()));
+    }
+}
+
+TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
+    const Scene scene = test::make_overlap_scene(120, 5);
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    // A gain no doubling can reach: the first doubling is tried and none after it.
+    const RebraidBuild once =
+        build_rebraid(scene, bvhs, {.budget_doublings = 8, .budget_search_min_gain = 0.99f});
+    EXPECT_LE(once.budget, 8u * scene.instances.size());
 }
 
 TEST(RebraidOpening, LeafOpeningSplitsLeavesIntoTriangles) {
@@ -286,6 +323,35 @@ TEST(ObjectSubtreeCounts, EachInnerNodeCountsTheTrianglesBelowIt) {
     }
 }
 
+TEST(ObjectSubtreeCounts, AnyNodeNumberingAndLazyCountsAgree) {
+    const Scene scene = make_default_scene();
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    const LazySubtreeCounts lazy(bvhs);
+    for (std::size_t m = 0; m < bvhs.size(); ++m) {
+        const ObjectBvh& bvh = bvhs[m];
+        if (!bvh.root.is_inner() || bvh.nodes.size() < 3) continue;
+        const std::vector<std::uint32_t> counts = subtree_prim_counts(bvh);
+        const std::span<const std::uint32_t> lazy_counts = lazy.counts_of(std::uint32_t(m));
+        ASSERT_EQ(lazy_counts.size(), counts.size());
+        EXPECT_TRUE(std::equal(counts.begin(), counts.end(), lazy_counts.begin()));
+        // The same tree with its node ids reversed (children now before parents, as tree
+        // rotations can leave them): the counts must follow the nodes.
+        ObjectBvh reversed = bvh;
+        const auto last = std::uint32_t(bvh.nodes.size() - 1);
+        auto renumber = [&](NodeRef ref) {
+            return ref.is_inner() ? NodeRef::inner(last - ref.node_id()) : ref;
+        };
+        for (std::uint32_t n = 0; n <= last; ++n) {
+            reversed.nodes[last - n] = bvh.nodes[n];
+            for (NodeRef& child : reversed.nodes[last - n].children) child = renumber(child);
+        }
+        reversed.root = renumber(bvh.root);
+        const std::vector<std::uint32_t> reversed_counts = subtree_prim_counts(reversed);
+        for (std::uint32_t n = 0; n <= last; ++n)
+            EXPECT_EQ(reversed_counts[last - n], counts[n]) << "mesh " << m << " node " << n;
+    }
+}
+
 TEST(OverlapOpening, SelectsOnlyBoxesSharedWithOtherInstances) {
     const BuildPrim a{{{0, 0, 0}, {2, 2, 2}}, 0, 1};
     const BuildPrim b{{{1, 1, 1}, {3, 3, 3}}, 1, 1};     // overlaps a
@@ -310,6 +376,9 @@ TEST(RebraidOpening, SettingsRejectOutOfRangeValues) {
     EXPECT_THROW((RebraidSettings{.instance_entry_cost = -1.0f}.validate()), Error);
     EXPECT_THROW((RebraidSettings{.overlap_threshold = -0.5f}.validate()), Error);
     EXPECT_THROW((RebraidSettings{.opening_rule = OpeningRule(7)}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.budget_doublings = 17}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.budget_search_min_gain = -0.1f}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.budget_search_min_gain = 1.0f}.validate()), Error);
     EXPECT_NO_THROW((RebraidSettings{.opening_rule = OpeningRule::overlap}.validate()));
 }
 

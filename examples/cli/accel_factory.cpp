@@ -48,6 +48,9 @@ constexpr std::array kObjectBuilderKinds{ObjectBuilderKind::own, ObjectBuilderKi
                                          ObjectBuilderKind::embree_medium};
 
 constexpr std::array kOpeningRules{OpeningRule::extent, OpeningRule::sah, OpeningRule::overlap};
+constexpr std::array kBRefBoundsRules{BRefBoundsRule::transformed_box,
+                                      BRefBoundsRule::transformed_children,
+                                      BRefBoundsRule::transformed_vertices};
 
 /// The structure's own name: `spec` up to its first ':'.
 std::string_view base_name(std::string_view spec) {
@@ -112,6 +115,11 @@ void apply_variant_setting(std::string_view spec, std::string_view key, std::str
         if (levels < 0.0f || levels > 8.0f || levels != std::floor(levels))
             fail("not a whole number in [0, 8]");
         rebraid.estimate_levels = std::uint32_t(levels);
+    } else if (key == "budget-doublings") {
+        const float doublings = number();
+        if (doublings < 0.0f || doublings > 16.0f || doublings != std::floor(doublings))
+            fail("not a whole number in [0, 16]");
+        rebraid.budget_doublings = std::uint32_t(doublings);
     } else if (key == "overlap-threshold") {
         rebraid.overlap_threshold = number();
     } else if (key == "budget-rule") {
@@ -119,10 +127,10 @@ void apply_variant_setting(std::string_view spec, std::string_view key, std::str
                           std::pair{std::string_view("primitives"), BudgetRule::per_primitive}},
                rebraid.budget_rule);
     } else if (key == "bref-bounds") {
-        one_of(std::array{std::pair{std::string_view("box"), BRefBoundsRule::transformed_box},
-                          std::pair{std::string_view("children"),
-                                    BRefBoundsRule::transformed_children}},
-               rebraid.bounds_rule);
+        std::array<std::pair<std::string_view, BRefBoundsRule>, kBRefBoundsRules.size()> names;
+        for (std::size_t i = 0; i < names.size(); ++i)
+            names[i] = {bref_bounds_rule_name(kBRefBoundsRules[i]), kBRefBoundsRules[i]};
+        one_of(names, rebraid.bounds_rule);
     } else if (key == "opening") {
         std::array<std::pair<std::string_view, OpeningRule>, kOpeningRules.size()> names;
         for (std::size_t i = 0; i < names.size(); ++i)
@@ -156,6 +164,22 @@ std::string_view opening_rule_name(OpeningRule rule) {
 
 std::span<const OpeningRule> opening_rules() {
     return kOpeningRules;
+}
+
+std::string_view bref_bounds_rule_name(BRefBoundsRule rule) {
+    switch (rule) {
+        case BRefBoundsRule::transformed_box:
+            return "box";
+        case BRefBoundsRule::transformed_children:
+            return "children";
+        case BRefBoundsRule::transformed_vertices:
+            return "vertices";
+    }
+    return "unknown";
+}
+
+std::span<const BRefBoundsRule> bref_bounds_rules() {
+    return kBRefBoundsRules;
 }
 
 std::string_view object_builder_name(ObjectBuilderKind kind) {

@@ -39,6 +39,12 @@ std::string_view opening_rule_name(OpeningRule rule);
 /// Every OpeningRule, in the order `--help` lists them.
 std::span<const OpeningRule> opening_rules();
 
+/// The `--bref-bounds` name of `rule` ("box", "children", "vertices").
+std::string_view bref_bounds_rule_name(BRefBoundsRule rule);
+
+/// Every BRefBoundsRule, in the order `--help` lists them.
+std::span<const BRefBoundsRule> bref_bounds_rules();
+
 /// The `--object-builder` name of `kind` ("own", "embree-high", "embree-medium").
 std::string_view object_builder_name(ObjectBuilderKind kind);
 
@@ -79,7 +85,8 @@ struct AccelVariant {
 /// The keys a variant suffix accepts, for help texts.
 inline constexpr std::string_view kAccelVariantKeys =
     "object-builder, open-threshold, budget-factor, budget-rule, primitives-per-bref, "
-    "bref-bounds, opening, open-leaves, instance-entry-cost, estimate-levels, overlap-threshold";
+    "bref-bounds, opening, open-leaves, instance-entry-cost, estimate-levels, overlap-threshold, "
+    "budget-doublings";
 
 /// Parses `spec` (`NAME[:KEY=VALUE]...`) on top of `base`; throws rebraid::Error naming the
 /// spec and the bad name, key or value. The settings are validated.

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "accel_factory.h"
 #include "animate_output.h"
 #include "bench_rays.h"
 #include "commands.h"
@@ -41,6 +42,7 @@ struct AnimateOptions {
     float budget_factor = RebraidSettings{}.budget_factor;
     std::uint32_t max_cut_pieces = IncrementalTopSettings{}.max_cut_pieces;
     bool has_embree = true;
+    ObjectBuilderKind static_builder = ObjectBuilderKind::own;
     int width = 640;
     int height = 360;
     std::uint64_t seed = 1;
@@ -121,13 +123,21 @@ double time_render(const Accel& accel, const BenchRays& rays, std::vector<Hit>& 
 }
 
 std::vector<UpdateStrategy> chosen_strategies(const AnimateOptions& options) {
-    std::vector<UpdateStrategy> strategies;
+    // The library's list, so a new strategy is measured without touching this command.
     if (options.update_names.empty())
-        return {UpdateStrategy::rebuild, UpdateStrategy::refit, UpdateStrategy::rotate,
-                UpdateStrategy::restructure, UpdateStrategy::automatic};
+        return {std::begin(kUpdateStrategies), std::end(kUpdateStrategies)};
+    std::vector<UpdateStrategy> strategies;
     for (const std::string& name : options.update_names)
         strategies.push_back(parse_update_strategy(name));
     return strategies;
+}
+
+/// "rebuild, refit, ..., auto": every strategy's name, for the help text.
+std::string strategy_names() {
+    std::string names;
+    for (UpdateStrategy strategy : kUpdateStrategies)
+        names += (names.empty() ? "" : ", ") + std::string(update_strategy_name(strategy));
+    return names;
 }
 
 std::vector<DynamicTop> chosen_tops(const AnimateOptions& options) {
@@ -175,6 +185,8 @@ void run_animate(const AnimateOptions& options) {
             settings.update.strategy = strategy;
             settings.rebraid.budget_factor = options.budget_factor;
             settings.incremental.max_cut_pieces = options.max_cut_pieces;
+            if (options.static_builder != ObjectBuilderKind::own)
+                settings.static_builder = make_object_builder(options.static_builder);
             methods.push_back(std::make_unique<OwnMethod>(dynamic, settings));
         }
 
@@ -285,8 +297,8 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         ->type_name("DT");
     command
         ->add_option("--update", options->update_names,
-                     "object-BVH update strategies, comma-separated: rebuild, refit, rotate, "
-                     "restructure, auto (default: all)")
+                     "object-BVH update strategies, comma-separated: " + strategy_names() +
+                         " (default: all)")
         ->delimiter(',')
         ->type_name("STRATEGY");
     command
@@ -310,6 +322,24 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         ->capture_default_str()
         ->type_name("N");
     command->add_flag("!--no-embree", options->has_embree, "leave out the Embree methods");
+    {
+        std::vector<std::string> names;
+        for (ObjectBuilderKind kind : object_builder_kinds())
+            names.emplace_back(object_builder_name(kind));
+        std::string joined;
+        for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
+        command
+            ->add_option_function<std::string>(
+                "--static-builder",
+                [options](const std::string& name) {
+                    for (ObjectBuilderKind kind : object_builder_kinds())
+                        if (object_builder_name(kind) == name) options->static_builder = kind;
+                },
+                "BVHs of the static meshes in twolevel and rebraid methods (built once): " +
+                    joined + " (default own); embree-high uses spatial splits")
+            ->check(CLI::IsMember(names))
+            ->type_name("NAME");
+    }
     command->add_option("--width", options->width, "image width of the rendered frame")
         ->check(CLI::Range(1, 32768))
         ->capture_default_str();

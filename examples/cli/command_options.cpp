@@ -76,16 +76,16 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         ->check(CLI::PositiveNumber)
         ->capture_default_str()
         ->type_name("P");
-    const std::map<std::string, BRefBoundsRule> bounds_rules{
-        {"box", BRefBoundsRule::transformed_box},
-        {"children", BRefBoundsRule::transformed_children}};
+    std::map<std::string, BRefBoundsRule> bounds_rules;
+    for (BRefBoundsRule rule : bref_bounds_rules())
+        bounds_rules.emplace(std::string(bref_bounds_rule_name(rule)), rule);
     command
         .add_option("--bref-bounds", options.rebraid.bounds_rule,
                     "rebraid: world boxes of instanced BRefs: box (the node's box transformed, "
-                    "paper 5.4) or children (union of its transformed children: tighter)")
+                    "paper 5.4), children (union of its transformed children: tighter) or "
+                    "vertices (box of its transformed vertices: tight)")
         ->transform(CLI::CheckedTransformer(bounds_rules, CLI::ignore_case))
-        ->default_str(options.rebraid.bounds_rule == BRefBoundsRule::transformed_box ? "box"
-                                                                                     : "children")
+        ->default_str(std::string(bref_bounds_rule_name(options.rebraid.bounds_rule)))
         ->type_name("RULE");
     std::map<std::string, OpeningRule> opening_names;
     for (OpeningRule rule : opening_rules())
@@ -116,6 +116,14 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         ->check(CLI::Range(0, 8))
         ->capture_default_str()
         ->type_name("L");
+    command
+        .add_option("--budget-doublings", options.rebraid.budget_doublings,
+                    "rebraid: also build with the budget doubled, up to this many times while "
+                    "each doubling lowers the exact SAH cost by 1 % of the top level's own, "
+                    "and keep the cheapest build (0: build once)")
+        ->check(CLI::Range(0, 16))
+        ->capture_default_str()
+        ->type_name("D");
     command
         .add_option("--overlap-threshold", options.rebraid.overlap_threshold,
                     "rebraid, --opening overlap: least fraction of a BRef's box shared with "

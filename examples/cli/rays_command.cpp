@@ -38,7 +38,7 @@ void add_rays_command(CLI::App& app, CommonOptions& common, CommandAction& actio
         "uniform on the sphere; the same seed gives the same file.");
     command
         ->add_option("SCENE", options->scene_path,
-                     "scene file (.gltf/.glb; the default scene when omitted)")
+                     "scene file (.gltf/.glb; the default scene when omitted or 'default')")
         ->type_name("PATH");
     command->add_option("-n,--count", options->count, "number of rays")->required();
     command->add_option("-o,--output", options->rays_path, "ray file (default: standard output)")

@@ -102,7 +102,7 @@ std::vector<std::string> structure_names(const RenderOptions& options) {
 
 RenderScene load_render_scene(const RenderOptions& options) {
     RenderScene result;
-    if (options.scene_path.empty()) {
+    if (is_default_scene(options.scene_path)) {
         result.loaded.scene = make_default_scene();
         result.loaded.scene.validate();
         return result;
@@ -284,7 +284,7 @@ void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& act
         "camera is the file's first glTF camera, else one framing the whole scene from above.");
     command
         ->add_option("SCENE", options->scene_path,
-                     "scene file (.gltf/.glb; the default scene when omitted)")
+                     "scene file (.gltf/.glb; the default scene when omitted or 'default')")
         ->type_name("PATH");
     command->add_option("-o,--output", options->image_path, "image file; folders are created")
         ->capture_default_str()

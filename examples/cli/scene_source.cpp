@@ -23,8 +23,12 @@ std::string lowercase_extension(const std::filesystem::path& path) {
 
 }  // namespace
 
+bool is_default_scene(const std::string& path) {
+    return path.empty() || path == kDefaultSceneName;
+}
+
 Scene load_scene(const std::string& path) {
-    if (path.empty()) {
+    if (is_default_scene(path)) {
         Scene scene = make_default_scene();
         scene.validate();
         return scene;
@@ -46,7 +50,7 @@ Scene load_scene(const std::string& path) {
 Scene load_scene_at_time(const std::string& path, float time, int animation) {
     if (!std::isfinite(time))
         throw Error("--time " + std::to_string(time) + " is not a finite number of seconds");
-    if (path.empty()) return load_scene(path);
+    if (is_default_scene(path)) return load_scene(path);
     load_scene(path);  // the common messages for missing, misnamed or broken files
     GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
     const GltfAnimator animator(loaded,
@@ -57,7 +61,7 @@ Scene load_scene_at_time(const std::string& path, float time, int animation) {
 }
 
 std::string describe_scene(const std::string& path) {
-    return path.empty() ? std::string("default scene") : path;
+    return is_default_scene(path) ? std::string("default scene") : path;
 }
 
 }  // namespace rebraid::cli

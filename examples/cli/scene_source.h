@@ -6,8 +6,15 @@
 
 namespace rebraid::cli {
 
+/// The scene argument that names the built-in default scene, as an empty one does (a scene
+/// file needs a .gltf or .glb extension, so no file is shadowed).
+inline constexpr const char* kDefaultSceneName = "default";
+
+/// Whether `path` names the built-in default scene: empty or kDefaultSceneName.
+bool is_default_scene(const std::string& path);
+
 /// Loads the scene a command works on: the glTF file at `path` (.gltf or .glb), or the
-/// built-in default scene when `path` is empty. The result is validated. Throws
+/// built-in default scene when `path` is empty or "default". The result is validated. Throws
 /// rebraid::Error naming the file when it is missing, has another extension or fails to load.
 Scene load_scene(const std::string& path);
 

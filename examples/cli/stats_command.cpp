@@ -80,7 +80,7 @@ void add_stats_command(CLI::App& app, CommonOptions& common, CommandAction& acti
         "every statistic it reports.");
     command
         ->add_option("SCENE", options->scene_path,
-                     "scene file (.gltf/.glb; the default scene when omitted)")
+                     "scene file (.gltf/.glb; the default scene when omitted or 'default')")
         ->type_name("PATH");
     add_accel_option(*command, options->accel_name);
     add_accel_build_options(*command, options->accel_options);

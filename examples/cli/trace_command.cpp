@@ -69,9 +69,10 @@ void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& acti
         "Trace a ray file and write the closest hit of every ray, one line per ray in input "
         "order: 't instID primID', or 'inf -1 -1' for a miss.");
     command
-        ->add_option("[SCENE] RAYS", options->paths,
-                     "an optional scene file (.gltf/.glb; the default scene when omitted), "
-                     "then the ray file (one ray per line: ox oy oz dx dy dz tnear tfar)")
+        ->add_option(
+            "[SCENE] RAYS", options->paths,
+            "an optional scene file (.gltf/.glb; the default scene when omitted or 'default'), "
+            "then the ray file (one ray per line: ox oy oz dx dy dz tnear tfar)")
         ->expected(1, 2)
         ->required()
         ->type_name("");
