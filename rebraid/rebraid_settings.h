@@ -30,8 +30,10 @@ enum class OpeningRule {
     overlap,
 };
 
-/// Parameters of the re-braiding top-level builder (Benthin et al. 2017). Defaults are the
-/// paper's values and the ones bench/RESULTS.md uses.
+/// Parameters of the re-braiding top-level builder (Benthin et al. 2017). Defaults: the paper's
+/// threshold, budget and termination, with two of issue 10's rules that measured better on
+/// every scene (bench/RESULTS.md, "Issue 10"): `sah` opening and BRef bounds from the
+/// transformed vertices. paper_rules() gives the paper's rules alone.
 struct RebraidSettings {
     /// A BRef is opened when its extent along the segment's largest axis exceeds this
     /// fraction of the segment's extent (paper §4.2: 10%). 0 opens every inner-node BRef
@@ -67,10 +69,11 @@ struct RebraidSettings {
     /// boxes has at most this fraction of the surface area of the smaller box.
     float small_overlap_fraction = 0.1f;
     /// World-space boxes of BRefs of transformed instances: the paper's transformed node box
-    /// (§5.4) or the tighter union of transformed children (bref_bounds.h).
-    BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_box;
+    /// (§5.4), the tighter union of transformed children, or the box of the transformed
+    /// vertices (bref_bounds.h).
+    BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_vertices;
     /// Which BRefs are opened (see OpeningRule).
-    OpeningRule opening_rule = OpeningRule::extent;
+    OpeningRule opening_rule = OpeningRule::sah;
     /// Also open BRefs to object-BVH leaves of several triangles, into one BRef per triangle
     /// (a leaf reference of count 1), when they meet the opening rule. For scenes of many tiny
     /// objects whose whole BVH is one leaf or a few.
@@ -99,6 +102,15 @@ struct RebraidSettings {
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;
+
+    /// The paper's rules alone: the extent opening rule (§4.2) with estimated child counts
+    /// (§5.3) and transformed node boxes (§5.4); everything else as the defaults.
+    static RebraidSettings paper_rules() {
+        RebraidSettings settings;
+        settings.bounds_rule = BRefBoundsRule::transformed_box;
+        settings.opening_rule = OpeningRule::extent;
+        return settings;
+    }
 };
 
 }  // namespace rebraid

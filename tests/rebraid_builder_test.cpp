@@ -26,20 +26,39 @@ struct NamedSettings {
     RebraidSettings settings;
 };
 
-/// The paper's defaults, plain two-level (no budget), open everything (huge budget, no
-/// threshold), the per-primitive budget rule, and the tighter BRef bounds rule.
+/// The paper's rules (RebraidSettings::paper_rules) with `change` applied.
+template <class Change>
+RebraidSettings paper_with(Change change) {
+    RebraidSettings settings = RebraidSettings::paper_rules();
+    change(settings);
+    return settings;
+}
+
+/// The paper's rules: as published, plain two-level (no budget), open everything (huge
+/// budget, no threshold), a high threshold, the per-primitive budget rule and the tighter
+/// BRef bounds rule; and the project's defaults (issue 10's sah opening, vertex bounds).
 std::vector<NamedSettings> settings_variants() {
     return {
-        {"paper", {}},
-        {"no-budget", {.budget_factor = 0.0f}},
-        {"open-everything", {.open_threshold = 0.0f, .budget_factor = 1000.0f}},
-        {"threshold-0.5", {.open_threshold = 0.5f, .budget_factor = 2.0f}},
-        {"per-primitive",
-         {.budget_rule = BudgetRule::per_primitive, .primitives_per_bref = 100.0f}},
-        {"children-bounds",
-         {.open_threshold = 0.05f,
-          .budget_factor = 8.0f,
-          .bounds_rule = BRefBoundsRule::transformed_children}},
+        {"paper", RebraidSettings::paper_rules()},
+        {"no-budget", paper_with([](RebraidSettings& s) { s.budget_factor = 0.0f; })},
+        {"open-everything", paper_with([](RebraidSettings& s) {
+             s.open_threshold = 0.0f;
+             s.budget_factor = 1000.0f;
+         })},
+        {"threshold-0.5", paper_with([](RebraidSettings& s) {
+             s.open_threshold = 0.5f;
+             s.budget_factor = 2.0f;
+         })},
+        {"per-primitive", paper_with([](RebraidSettings& s) {
+             s.budget_rule = BudgetRule::per_primitive;
+             s.primitives_per_bref = 100.0f;
+         })},
+        {"children-bounds", paper_with([](RebraidSettings& s) {
+             s.open_threshold = 0.05f;
+             s.budget_factor = 8.0f;
+             s.bounds_rule = BRefBoundsRule::transformed_children;
+         })},
+        {"default", {}},
     };
 }
 
@@ -100,7 +119,10 @@ TEST(RebraidBuilder, OpensWhereInstancesOverlap) {
 TEST(RebraidBuilder, NoBudgetGivesAPlainTwoLevelTop) {
     const Scene scene = make_default_scene();
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
-    RebraidBuild rebraided = build_rebraid(scene, bvhs, {.budget_factor = 0.0f});
+    // The paper's rules, whose BRef boxes are the plain top's (transformed node boxes).
+    RebraidSettings no_budget = RebraidSettings::paper_rules();
+    no_budget.budget_factor = 0.0f;
+    RebraidBuild rebraided = build_rebraid(scene, bvhs, no_budget);
     // Without budget nothing opens: one item per instance, at its object root.
     ASSERT_EQ(rebraided.top.items.size(), scene.instances.size());
     std::vector<int> seen(scene.instances.size(), 0);

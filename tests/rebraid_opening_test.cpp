@@ -177,7 +177,7 @@ TEST(RebraidOpening, SahRuleOpensNothingWithoutOverlap) {
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
     // The paper's rule opens here (small segments hold a few instances, each wide against
     // the segment), which is what makes the check below meaningful.
-    const RebraidBuild extent = build_rebraid(scene, bvhs, {});
+    const RebraidBuild extent = build_rebraid(scene, bvhs, RebraidSettings::paper_rules());
     EXPECT_GT(extent.opened, 0u);
     for (const OpeningRule rule : {OpeningRule::sah, OpeningRule::overlap}) {
         const RebraidBuild build = build_rebraid(scene, bvhs, {.opening_rule = rule});
@@ -292,7 +292,10 @@ TEST(RebraidOpening, LeafOpeningSplitsLeavesIntoTriangles) {
         }
         return count;
     };
-    const RebraidSettings everything{.open_threshold = 0.0f, .budget_factor = 1000.0f};
+    // The paper's rule opens every candidate (the sah rule would judge leaves too).
+    RebraidSettings everything = RebraidSettings::paper_rules();
+    everything.open_threshold = 0.0f;
+    everything.budget_factor = 1000.0f;
     RebraidSettings with_leaves = everything;
     with_leaves.open_leaves = true;
     const RebraidBuild closed = build_rebraid(scene, bvhs, everything);
@@ -399,8 +402,8 @@ std::pair<int, std::string> run_cli(const std::string& arguments, const std::str
 
 TEST(RebraidOpeningCli, BenchComparesVariantsOnTheSameRaysByName) {
     const auto [code, out] = run_cli(
-        "bench --accel twolevel,rebraid,rebraid:opening=sah,rebraid:opening=sah:bref-bounds="
-        "children:open-leaves=1 --rays 500 --repetitions 1 --json --threads 2 " +
+        "bench --accel twolevel,rebraid:opening=extent,rebraid:opening=sah,rebraid:opening=sah:"
+        "bref-bounds=children:open-leaves=1 --rays 500 --repetitions 1 --json --threads 2 " +
             std::string(REBRAID_SHARED_SCENES) + "/motion_capture_rom.glb",
         "bench_variants");
     ASSERT_EQ(code, 0) << out;
@@ -412,9 +415,10 @@ TEST(RebraidOpeningCli, BenchComparesVariantsOnTheSameRaysByName) {
         EXPECT_EQ(row.at("rays_diffuse"), json[0].at("rays_diffuse"));
         EXPECT_EQ(row.at("hits_primary"), json[0].at("hits_primary"));
     }
-    EXPECT_EQ(names, (std::set<std::string>{"twolevel", "rebraid", "rebraid:opening=sah",
-                                            "rebraid:opening=sah:bref-bounds=children:open-"
-                                            "leaves=1"}));
+    EXPECT_EQ(names,
+              (std::set<std::string>{"twolevel", "rebraid:opening=extent", "rebraid:opening=sah",
+                                     "rebraid:opening=sah:bref-bounds=children:open-"
+                                     "leaves=1"}));
     // The paper's rule and the SAH rule build different tops on this scene.
     EXPECT_NE(json[1].at("structure_hash"), json[2].at("structure_hash"));
 }

@@ -77,9 +77,11 @@ TEST(TreeletSampler, RepairsABadlyDegradedTree) {
         << "the shuffle should degrade the refit tree";
     TreeletSettings settings;
     settings.root_fraction = 0.5;
-    TreeletStats stats;
-    for (int pass = 0; pass < 4; ++pass) stats = sampler.optimize(mesh, bvh, settings);
-    EXPECT_GT(stats.applied, 0u);
+    // Restructurings applied over the passes (a build that rounds differently may finish the
+    // repair before the last pass, which then applies nothing).
+    std::uint64_t applied = 0;
+    for (int pass = 0; pass < 4; ++pass) applied += sampler.optimize(mesh, bvh, settings).applied;
+    EXPECT_GT(applied, 0u);
     EXPECT_LT(object_bvh_sah(bvh), 0.9 * refit_sah);
     expect_valid(mesh, bvh);
     expect_hits_of_embree_flat(mesh, bvh);
