@@ -37,18 +37,9 @@ BBox3f instance_world_bounds(InstanceId instance_id, std::span<const ObjectBvh> 
 double instanced_scene_half_area(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,
                                  std::span<const std::uint32_t> instance_mesh,
                                  std::span<const AffineTransform> object_to_world) {
-    std::vector<char> is_reached(object_to_world.size(), 0);
-    for (const TopLevelItem& item : top.items) is_reached[item.instance_id] = 1;
-    // Per instance in parallel; the union of boxes does not depend on the order.
-    std::vector<BBox3f> boxes(is_reached.size());
-    tbb::parallel_for(std::size_t(0), is_reached.size(), [&](std::size_t i) {
-        if (is_reached[i])
-            boxes[i] =
-                instance_world_bounds(InstanceId(i), object_bvhs, instance_mesh, object_to_world);
+    return reached_instances_half_area(top, object_to_world.size(), [&](InstanceId id) {
+        return instance_world_bounds(id, object_bvhs, instance_mesh, object_to_world);
     });
-    BBox3f scene;
-    for (const BBox3f& box : boxes) scene.extend(box);
-    return scene.half_area();
 }
 
 TreeCounts count_tree(std::span<const WideNode> nodes, NodeRef root) {

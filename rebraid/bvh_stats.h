@@ -2,6 +2,9 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
+
+#include <tbb/parallel_for.h>
 
 #include "rebraid/object_bvh.h"
 #include "rebraid/top_level_bvh.h"
@@ -42,6 +45,23 @@ double top_inner_cost(const TopLevelBvh& top);
 BBox3f instance_world_bounds(InstanceId instance_id, std::span<const ObjectBvh> object_bvhs,
                              std::span<const std::uint32_t> instance_mesh,
                              std::span<const AffineTransform> object_to_world);
+
+/// Half area of the union of `box_of(id)` over the instance ids `top`'s items reach (ids below
+/// `instance_count`), `box_of` called once per such instance, in parallel: a union of boxes
+/// does not depend on the order, so the result is the same on any thread count.
+template <class BoxOf>
+double reached_instances_half_area(const TopLevelBvh& top, std::size_t instance_count,
+                                   BoxOf&& box_of) {
+    std::vector<char> is_reached(instance_count, 0);
+    for (const TopLevelItem& item : top.items) is_reached[item.instance_id] = 1;
+    std::vector<BBox3f> boxes(instance_count);
+    tbb::parallel_for(std::size_t(0), instance_count, [&](std::size_t i) {
+        if (is_reached[i]) boxes[i] = box_of(InstanceId(i));
+    });
+    BBox3f scene;
+    for (const BBox3f& box : boxes) scene.extend(box);
+    return scene.half_area();
+}
 
 /// Half area of the union of instance_world_bounds() over the instances `top`'s items reach:
 /// the box of the scene's world-space triangles, which is the root box of a flat BVH over

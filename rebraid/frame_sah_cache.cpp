@@ -20,25 +20,15 @@ double FrameSahCache::scene_half_area(const TopLevelBvh& top,
                                       std::span<const ObjectBvh> object_bvhs,
                                       std::span<const std::uint32_t> instance_mesh,
                                       std::span<const AffineTransform> object_to_world) {
-    std::vector<char> is_reached(object_to_world.size(), 0);
-    for (const TopLevelItem& item : top.items) is_reached[item.instance_id] = 1;
-    // As instanced_scene_half_area(), with the boxes of fixed instances remembered; the union
-    // of the same boxes is the same whatever the order.
-    std::vector<BBox3f> boxes(is_reached.size());
-    tbb::parallel_for(std::size_t(0), is_reached.size(), [&](std::size_t i) {
-        if (!is_reached[i]) return;
-        const bool is_fixed = i < is_fixed_.size() && is_fixed_[i];
-        if (is_fixed && fixed_bounds_[i]) {
-            boxes[i] = *fixed_bounds_[i];
-            return;
-        }
-        boxes[i] =
-            instance_world_bounds(InstanceId(i), object_bvhs, instance_mesh, object_to_world);
-        if (is_fixed) fixed_bounds_[i] = boxes[i];  // each index written by one task only
+    // As instanced_scene_half_area(), with the boxes of fixed instances remembered (each
+    // index written by one task only).
+    return reached_instances_half_area(top, object_to_world.size(), [&](InstanceId id) {
+        const bool is_fixed = id < is_fixed_.size() && is_fixed_[id];
+        if (is_fixed && fixed_bounds_[id]) return *fixed_bounds_[id];
+        const BBox3f box = instance_world_bounds(id, object_bvhs, instance_mesh, object_to_world);
+        if (is_fixed) fixed_bounds_[id] = box;
+        return box;
     });
-    BBox3f scene;
-    for (const BBox3f& box : boxes) scene.extend(box);
-    return scene.half_area();
 }
 
 std::optional<double> FrameSahCache::find(InstanceId instance_id, NodeRef node,

@@ -322,24 +322,9 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         ->capture_default_str()
         ->type_name("N");
     command->add_flag("!--no-embree", options->has_embree, "leave out the Embree methods");
-    {
-        std::vector<std::string> names;
-        for (ObjectBuilderKind kind : object_builder_kinds())
-            names.emplace_back(object_builder_name(kind));
-        std::string joined;
-        for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
-        command
-            ->add_option_function<std::string>(
-                "--static-builder",
-                [options](const std::string& name) {
-                    for (ObjectBuilderKind kind : object_builder_kinds())
-                        if (object_builder_name(kind) == name) options->static_builder = kind;
-                },
-                "BVHs of the static meshes in twolevel and rebraid methods (built once): " +
-                    joined + " (default own); embree-high uses spatial splits")
-            ->check(CLI::IsMember(names))
-            ->type_name("NAME");
-    }
+    add_object_builder_option(*command, "--static-builder", options->static_builder,
+                              "BVHs of the static meshes in twolevel and rebraid methods (built "
+                              "once)");
     command->add_option("--width", options->width, "image width of the rendered frame")
         ->check(CLI::Range(1, 32768))
         ->capture_default_str();

@@ -27,7 +27,8 @@ void add_accel_option(CLI::App& command, std::string& accel_name) {
         ->type_name("NAME");
 }
 
-void add_accel_build_options(CLI::App& command, AccelOptions& options) {
+void add_object_builder_option(CLI::App& command, const std::string& option,
+                               ObjectBuilderKind& target, const std::string& what) {
     std::vector<std::string> names;
     for (ObjectBuilderKind kind : object_builder_kinds())
         names.emplace_back(object_builder_name(kind));
@@ -35,17 +36,21 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
     for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
     command
         .add_option_function<std::string>(
-            "--object-builder",
-            [&options](const std::string& name) {
+            option,
+            [&target](const std::string& name) {
                 for (ObjectBuilderKind kind : object_builder_kinds())
-                    if (object_builder_name(kind) == name) options.object_builder = kind;
+                    if (object_builder_name(kind) == name) target = kind;
             },
-            "object BVHs of twolevel and rebraid: " + joined + " (default " +
-                std::string(object_builder_name(options.object_builder)) +
+            what + ": " + joined + " (default " + std::string(object_builder_name(target)) +
                 "); embree-high is rtcBuildBVH with spatial splits, so a triangle may sit in "
                 "several leaves")
         ->check(CLI::IsMember(names))
         ->type_name("NAME");
+}
+
+void add_accel_build_options(CLI::App& command, AccelOptions& options) {
+    add_object_builder_option(command, "--object-builder", options.object_builder,
+                              "object BVHs of twolevel and rebraid");
     command
         .add_option("--open-threshold", options.rebraid.open_threshold,
                     "rebraid: open a BRef whose extent along its segment's largest axis exceeds "

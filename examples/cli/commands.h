@@ -9,7 +9,8 @@ class App;
 
 namespace rebraid::cli {
 
-struct AccelOptions;  // accel_factory.h
+struct AccelOptions;           // accel_factory.h
+enum class ObjectBuilderKind;  // accel_factory.h
 
 /// Options every subcommand accepts.
 struct CommonOptions {
@@ -29,6 +30,11 @@ void add_accel_option(CLI::App& command, std::string& accel_name);
 
 /// Adds `--object-builder`, `--open-threshold` and `--budget-factor`, bound to `options`.
 void add_accel_build_options(CLI::App& command, AccelOptions& options);
+
+/// Adds `option` (e.g. "--object-builder") choosing an object-BVH builder by name into
+/// `target`, its help text `what` followed by the names and the default.
+void add_object_builder_option(CLI::App& command, const std::string& option,
+                               ObjectBuilderKind& target, const std::string& what);
 
 /// Each registers one subcommand on `app`; when it is chosen, `action` is set to its work.
 void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& action);
