@@ -12,6 +12,9 @@ namespace rebraid {
 struct TraversalCounters {
     std::uint64_t nodes_visited = 0;     ///< wide nodes whose children were box-tested
     std::uint64_t triangles_tested = 0;  ///< ray-triangle tests
+    /// Top-level items entered: each maps the ray into an instance's object space and starts
+    /// a traversal of its object BVH (two-level structures only; 0 for flat ones).
+    std::uint64_t object_entries = 0;
 };
 
 /// What `rebraid stats` reports for a structure. Fields that do not apply to a structure

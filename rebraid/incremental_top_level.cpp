@@ -4,7 +4,6 @@
 #include <cstring>
 #include <limits>
 #include <string>
-#include <unordered_map>
 #include <utility>
 
 #include "rebraid/build_timer.h"
@@ -39,20 +38,12 @@ std::vector<BuildPrim> make_upper_prims(const StaticTopCut& cut, const StaticTop
             {piece.bounds, std::uint32_t(prims.size()), weight(summary.prims_of(piece.ref))});
     // Dynamic BVHs change every frame: count their nodes afresh, once per mesh that has an
     // item below its root.
-    std::unordered_map<MeshId, std::vector<std::uint32_t>> mesh_counts;
+    const LazySubtreeCounts subtree_counts(object_bvhs);
     for (std::size_t i = 0; i < dynamic_top.items.size(); ++i) {
         const TopLevelItem& item = dynamic_top.items[i];
         const MeshId mesh_id = scene.instances[item.instance_id].mesh_id;
-        const ObjectBvh& bvh = object_bvhs[mesh_id];
-        std::span<const std::uint32_t> counts;
-        if (item.object_node.is_inner() && item.object_node != bvh.root) {
-            auto found = mesh_counts.find(mesh_id);
-            if (found == mesh_counts.end())
-                found = mesh_counts.emplace(mesh_id, subtree_prim_counts(bvh)).first;
-            counts = found->second;
-        }
         prims.push_back({dynamic_top.item_bounds[i], std::uint32_t(prims.size()),
-                         weight(object_ref_prim_count(bvh, item.object_node, counts))});
+                         weight(subtree_counts.item_prim_count(mesh_id, item.object_node))});
     }
     return prims;
 }

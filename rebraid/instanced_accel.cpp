@@ -18,10 +18,12 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     instance_mesh_.reserve(scene.instances.size());
     object_to_world_.reserve(scene.instances.size());
     world_to_object_.reserve(scene.instances.size());
+    instance_is_identity_.reserve(scene.instances.size());
     for (const Instance& instance : scene.instances) {
         instance_mesh_.push_back(instance.mesh_id);
         object_to_world_.push_back(instance.object_to_world);
         world_to_object_.push_back(instance.object_to_world.inverse());
+        instance_is_identity_.push_back(instance.object_to_world == AffineTransform::identity());
     }
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
@@ -33,43 +35,58 @@ namespace {
 /// The ray mapped into the object space of the instance a top-level item names, made once
 /// per run of items of the same instance (a re-braided top level holds several items per
 /// instance, often side by side in one leaf). t is invariant under the affine map, so
-/// tnear and tfar carry over unchanged.
+/// tnear and tfar carry over unchanged. Instances placed by the identity (objects built in
+/// world space, the paper's common case) use the world ray itself: no transform, no
+/// reciprocals, and the same numbers, since the identity maps every finite ray exactly.
 class ObjectRayCache {
 public:
-    ObjectRayCache(const Ray& world_ray, std::span<const AffineTransform> world_to_object)
-        : world_ray_(world_ray), world_to_object_(world_to_object) {}
+    ObjectRayCache(TraversalRay& world_ray, std::span<const AffineTransform> world_to_object,
+                   std::span<const std::uint8_t> is_identity)
+        : world_ray_(world_ray), world_to_object_(world_to_object), is_identity_(is_identity) {}
 
-    TraversalRay& ray_for(InstanceId instance_id, float tnear, float tfar) {
+    TraversalRay& ray_for(InstanceId instance_id) {
+        if (is_identity_[instance_id]) return world_ray_;
         if (instance_id != instance_id_) {
             const AffineTransform& to_object = world_to_object_[instance_id];
             ray_.emplace(to_object.transform_point(world_ray_.org),
-                         to_object.transform_vector(world_ray_.dir), tnear, tfar);
+                         to_object.transform_vector(world_ray_.dir), world_ray_.tnear,
+                         world_ray_.tfar);
             instance_id_ = instance_id;
         }
-        ray_->tnear = tnear;
-        ray_->tfar = tfar;
+        ray_->tnear = world_ray_.tnear;
+        ray_->tfar = world_ray_.tfar;
         return *ray_;
     }
 
 private:
-    const Ray& world_ray_;
+    TraversalRay& world_ray_;
     std::span<const AffineTransform> world_to_object_;
+    std::span<const std::uint8_t> is_identity_;
     InstanceId instance_id_ = kInvalidId;
     std::optional<TraversalRay> ray_;
 };
 
 }  // namespace
 
+void InstancedAccel::prefetch_item_target(NodeRef leaf) const {
+    const TopLevelItem& item = top_.items[leaf.first_prim()];
+    const ObjectBvh& bvh = object_bvhs_[instance_mesh_[item.instance_id]];
+    if (item.object_node.is_leaf())
+        __builtin_prefetch(bvh.triangles.data() + item.object_node.first_prim());
+    else
+        prefetch_node(bvh.nodes.data(), item.object_node);
+}
+
 Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
     Hit hit;
     TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    ObjectRayCache object_rays(ray, world_to_object_);
-    traverse_bvh(top_.nodes.data(), top_.root, world_ray, counters, [&](NodeRef leaf) {
+    ObjectRayCache object_rays(world_ray, world_to_object_, instance_is_identity_);
+    const auto enter_items = [&](NodeRef leaf) {
         const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
             const TopLevelItem& item = top_.items[i];
-            TraversalRay& object_ray =
-                object_rays.ray_for(item.instance_id, world_ray.tnear, world_ray.tfar);
+            if (counters) ++counters->object_entries;
+            TraversalRay& object_ray = object_rays.ray_for(item.instance_id);
             if (intersect_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
                                      item.object_node, object_ray, hit, counters)) {
                 world_ray.tfar = object_ray.tfar;
@@ -77,21 +94,24 @@ Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counter
             }
         }
         return false;
-    });
+    };
+    // A stacked item's object node is asked for as the item is stacked, as a flat BVH's
+    // stacked nodes are: its miss then overlaps the work on nearer items.
+    const auto prefetch_item = [this](NodeRef leaf) { prefetch_item_target(leaf); };
+    traverse_bvh(top_.nodes.data(), top_.root, world_ray, counters, enter_items, prefetch_item);
     return hit;
 }
 
 bool InstancedAccel::occluded(const Ray& ray) const {
     TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    ObjectRayCache object_rays(ray, world_to_object_);
+    ObjectRayCache object_rays(world_ray, world_to_object_, instance_is_identity_);
     // Any order: the first hit ends the query.
     return traverse_bvh<TraversalOrder::any>(
         top_.nodes.data(), top_.root, world_ray, nullptr, [&](NodeRef leaf) {
             const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
             for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
                 const TopLevelItem& item = top_.items[i];
-                TraversalRay& object_ray =
-                    object_rays.ray_for(item.instance_id, world_ray.tnear, world_ray.tfar);
+                TraversalRay& object_ray = object_rays.ray_for(item.instance_id);
                 if (occluded_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
                                         item.object_node, object_ray, nullptr))
                     return true;

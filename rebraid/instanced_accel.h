@@ -40,11 +40,16 @@ public:
     const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
 
 private:
+    /// Prefetches what entering the first item of top-level leaf `leaf` reads first.
+    void prefetch_item_target(NodeRef leaf) const;
+
     std::vector<ObjectBvh> object_bvhs_;
     TopLevelBvh top_;
     std::vector<std::uint32_t> instance_mesh_;
     std::vector<AffineTransform> object_to_world_;
     std::vector<AffineTransform> world_to_object_;
+    /// 1 where an instance's transform is the identity: rays enter it unmapped.
+    std::vector<std::uint8_t> instance_is_identity_;
     AccelStats build_info_;
 };
 

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 
+#include "rebraid/static_top_cut.h"
+
 namespace rebraid {
 namespace {
 
@@ -76,6 +78,14 @@ std::span<const std::uint32_t> LazySubtreeCounts::counts_of(std::uint32_t mesh) 
     std::call_once(computed_[mesh],
                    [&] { counts_[mesh] = subtree_prim_counts(object_bvhs_[mesh]); });
     return counts_[mesh];
+}
+
+std::uint32_t LazySubtreeCounts::item_prim_count(std::uint32_t mesh, NodeRef node) const {
+    const ObjectBvh& bvh = object_bvhs_[mesh];
+    // The root and leaves need no node counts: a whole-mesh item never pays for counting.
+    const bool needs_counts = node.is_inner() && node != bvh.root;
+    return object_ref_prim_count(bvh, node,
+                                 needs_counts ? counts_of(mesh) : std::span<const std::uint32_t>{});
 }
 
 }  // namespace rebraid

@@ -38,6 +38,11 @@ public:
     }
     /// All inner-node counts of `mesh`'s BVH, computing them on first use.
     std::span<const std::uint32_t> counts_of(std::uint32_t mesh) const;
+    /// Triangles a top-level item at `node` of the BVH of `mesh` stands for, by the rule of
+    /// object_ref_prim_count (static_top_cut.h): the mesh's triangle count at the root, a
+    /// leaf's own count, zero for an empty reference; only an inner node below the root makes
+    /// the mesh's counts (on first use). Throws rebraid::Error for a node the BVH lacks.
+    std::uint32_t item_prim_count(std::uint32_t mesh, NodeRef node) const;
 
 private:
     std::span<const ObjectBvh> object_bvhs_;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <queue>
-#include <unordered_map>
 
 #include "rebraid/error.h"
 #include "rebraid/object_subtree_counts.h"
@@ -76,7 +75,7 @@ StaticTopSummary summarize_static_top(const TopLevelBvh& top, const Scene& scene
                                       std::span<const ObjectBvh> object_bvhs) {
     StaticTopSummary summary;
     // Node counts per mesh, made only for meshes some item enters below the root.
-    std::unordered_map<MeshId, std::vector<std::uint32_t>> mesh_counts;
+    const LazySubtreeCounts subtree_counts(object_bvhs);
     summary.item_prims.resize(top.items.size());
     for (std::size_t i = 0; i < top.items.size(); ++i) {
         const TopLevelItem& item = top.items[i];
@@ -84,16 +83,8 @@ StaticTopSummary summarize_static_top(const TopLevelBvh& top, const Scene& scene
             throw Error("summarize_static_top: item " + std::to_string(i) + " names instance " +
                         std::to_string(item.instance_id) + " of a scene with " +
                         std::to_string(scene.instances.size()));
-        const MeshId mesh_id = scene.instances[item.instance_id].mesh_id;
-        const ObjectBvh& bvh = object_bvhs[mesh_id];
-        std::span<const std::uint32_t> counts;
-        if (item.object_node.is_inner() && item.object_node != bvh.root) {
-            auto found = mesh_counts.find(mesh_id);
-            if (found == mesh_counts.end())
-                found = mesh_counts.emplace(mesh_id, subtree_prim_counts(bvh)).first;
-            counts = found->second;
-        }
-        summary.item_prims[i] = object_ref_prim_count(bvh, item.object_node, counts);
+        summary.item_prims[i] = subtree_counts.item_prim_count(
+            scene.instances[item.instance_id].mesh_id, item.object_node);
     }
     summary.node_prims.assign(top.nodes.size(), 0);
     summary.node_height.assign(top.nodes.size(), 0);

@@ -15,6 +15,7 @@
 #include "rebraid/instanced_accel.h"
 #include "rebraid/random_rays.h"
 #include "rebraid/rebraid_builder.h"
+#include "rebraid/world_space_objects.h"
 #include "test_scenes.h"
 
 namespace rebraid {
@@ -56,6 +57,17 @@ TEST(AccelEquivalence, DefaultSceneMatchesEmbreeFlat) {
 TEST(AccelEquivalence, GeneratedScenesMatchEmbreeFlat) {
     for (const test::NamedScene& named : test::generated_scenes())
         expect_matches_embree_flat(named.scene, named.name);
+}
+
+// Instances placed by the identity are entered with the world ray itself, the others with a
+// mapped ray (instanced_accel.cpp): both kinds side by side, and objects all in world space.
+TEST(AccelEquivalence, IdentityAndTransformedInstancesTogetherMatchEmbreeFlat) {
+    Scene mixed = test::make_overlap_scene(24, 5);
+    for (std::size_t i = 0; i < mixed.instances.size(); i += 3)
+        mixed.instances[i].object_to_world = AffineTransform::identity();
+    expect_matches_embree_flat(mixed, "every third instance at the identity");
+    expect_matches_embree_flat(bake_instances_into_world_space(test::make_overlap_scene(24, 5)),
+                               "objects in world space");
 }
 
 class SharedSceneEquivalence : public testing::TestWithParam<std::string> {};

@@ -72,6 +72,25 @@ TEST(CliBench, JsonHasOneObjectPerSceneAndStructureWithEveryKey) {
         if (!is_embree) {
             EXPECT_TRUE(row.contains("nodes")) << accel;
         }
+        // Work per diffuse ray: counted by the project's structures, null for Embree's; only
+        // two-level ones enter objects, and with one instance (the dragon) the plain top
+        // enters it at most once per ray.
+        for (const char* key : {"nodes_per_diffuse_ray", "triangles_per_diffuse_ray",
+                                "object_entries_per_diffuse_ray"})
+            ASSERT_EQ(row.at(key).is_null(), is_embree) << key << " of " << accel;
+        if (!is_embree) {
+            EXPECT_GT(row.at("nodes_per_diffuse_ray").get<double>(), 0.0) << accel;
+            EXPECT_GT(row.at("triangles_per_diffuse_ray").get<double>(), 0.0) << accel;
+            const double entries = row.at("object_entries_per_diffuse_ray").get<double>();
+            if (is_two_level) {
+                EXPECT_GT(entries, 0.0) << accel;
+            } else {
+                EXPECT_EQ(entries, 0.0) << accel;
+            }
+            if (accel == "twolevel" && scene.find("chinese_dragon") != std::string::npos) {
+                EXPECT_LE(entries, 1.0);
+            }
+        }
         if (accel == "embree-flat") embree_flat_hits[scene] = row.at("hits_primary");
     }
     ASSERT_EQ(accels_per_scene.size(), 2u);

@@ -3,8 +3,6 @@
 // the same structure on any thread count); rotations never do worse than refit;
 // restructuring repairs a degraded tree; auto refits, repairs and rebuilds by its factors.
 #include <gtest/gtest.h>
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -18,6 +16,8 @@
 #include "rebraid/error.h"
 #include "rebraid/mesh_generators.h"
 #include "rebraid/object_bvh_update.h"
+#include "thread_count_hash.h"
+#include "update_test_scenes.h"
 
 namespace rebraid {
 namespace {
@@ -30,6 +30,7 @@ using test::rest_mesh;
 using test::shuffled;
 using test::structure_hash;
 using test::unwelded;
+using test::update_through_frames;
 
 ObjectBvhUpdateSettings with_strategy(UpdateStrategy strategy) {
     ObjectBvhUpdateSettings settings;
@@ -91,31 +92,28 @@ std::vector<StrategyCase> strategy_cases() {
 /// Builds on the rest pose, then updates through `frames` deformed frames; returns the BVH.
 ObjectBvh animate(const Mesh& rest, const ObjectBvhUpdateSettings& settings, int frames,
                   std::vector<ObjectBvhUpdateReport>* reports = nullptr) {
-    ObjectBvh bvh = build_object_bvh(rest);
     ObjectBvhUpdater updater(settings);
-    for (int frame = 1; frame <= frames; ++frame) {
-        const ObjectBvhUpdateReport report =
-            updater.update(deformed(rest, float(frame) / float(frames)), bvh);
-        if (reports) reports->push_back(report);
-    }
-    return bvh;
+    return update_through_frames(rest, frames, build_object_bvh(rest),
+                                 [&](const Mesh& mesh, ObjectBvh& bvh, int) {
+                                     const ObjectBvhUpdateReport report = updater.update(mesh, bvh);
+                                     if (reports) reports->push_back(report);
+                                 });
 }
 
 class EveryStrategy : public testing::TestWithParam<StrategyCase> {};
 
 TEST_P(EveryStrategy, KeepsAValidTreeEveryFrame) {
     const Mesh rest = rest_mesh();
-    ObjectBvh bvh = build_object_bvh(rest);
     ObjectBvhUpdater updater(GetParam().settings);
-    for (int frame = 1; frame <= 6; ++frame) {
-        SCOPED_TRACE("frame " + std::to_string(frame));
-        const Mesh mesh = deformed(rest, float(frame) / 6.0f);
-        const ObjectBvhUpdateReport report = updater.update(mesh, bvh);
-        expect_valid(mesh, bvh);
-        EXPECT_NEAR(report.sah, object_bvh_sah(bvh), 1e-5 * report.sah);
-        EXPECT_NE(report.applied, UpdateStrategy::automatic);
-        EXPECT_GE(report.update_ms, 0.0);
-    }
+    update_through_frames(rest, 6, build_object_bvh(rest),
+                          [&](const Mesh& mesh, ObjectBvh& bvh, int frame) {
+                              SCOPED_TRACE("frame " + std::to_string(frame));
+                              const ObjectBvhUpdateReport report = updater.update(mesh, bvh);
+                              expect_valid(mesh, bvh);
+                              EXPECT_NEAR(report.sah, object_bvh_sah(bvh), 1e-5 * report.sah);
+                              EXPECT_NE(report.applied, UpdateStrategy::automatic);
+                              EXPECT_GE(report.update_ms, 0.0);
+                          });
 }
 
 TEST_P(EveryStrategy, HitsEqualAFreshBuildAfterDeforming) {
@@ -126,16 +124,8 @@ TEST_P(EveryStrategy, HitsEqualAFreshBuildAfterDeforming) {
 
 TEST_P(EveryStrategy, SameStructureOnOneTwoAndEightThreads) {
     const Mesh rest = rest_mesh();
-    std::vector<std::uint64_t> hashes;
-    // Let an arena really have 8 threads on a machine with fewer cores.
-    const tbb::global_control allow_eight(tbb::global_control::max_allowed_parallelism, 8);
-    for (int threads : {1, 2, 8}) {
-        tbb::task_arena arena(threads);
-        arena.execute(
-            [&] { hashes.push_back(structure_hash(animate(rest, GetParam().settings, 4))); });
-    }
-    EXPECT_EQ(hashes[0], hashes[1]);
-    EXPECT_EQ(hashes[0], hashes[2]);
+    test::expect_same_hash_on_threads(
+        {1, 2, 8}, [&] { return structure_hash(animate(rest, GetParam().settings, 4)); });
 }
 
 INSTANTIATE_TEST_SUITE_P(ObjectBvhUpdate, EveryStrategy, testing::ValuesIn(strategy_cases()),
@@ -148,12 +138,11 @@ TEST(BvhRotator, NeverRaisesSahOverRefitOfTheSameFrame) {
     for (RotationLeafMode mode : {RotationLeafMode::pre_split, RotationLeafMode::split_merge}) {
         RotationSettings settings;
         settings.leaf_mode = mode;
-        ObjectBvh bvh = build_object_bvh(
+        const ObjectBvh built = build_object_bvh(
             rest, {.max_leaf_size = mode == RotationLeafMode::pre_split ? 1u : 4u});
         BvhRotator rotator;
         double total_gain = 0.0;
-        for (int frame = 1; frame <= 5; ++frame) {
-            const Mesh mesh = deformed(rest, float(frame) / 5.0f);
+        update_through_frames(rest, 5, built, [&](const Mesh& mesh, ObjectBvh& bvh, int frame) {
             ObjectBvh refit_only = bvh;
             const double refit_sah = refit_object_bvh(mesh, refit_only);
             const RotationPassStats stats = rotator.refit_and_rotate(mesh, bvh, settings);
@@ -163,7 +152,7 @@ TEST(BvhRotator, NeverRaisesSahOverRefitOfTheSameFrame) {
             total_gain += refit_sah - rotated_sah;
             EXPECT_GT(stats.swaps + stats.exchanges + stats.pull_ups + stats.splits + stats.merges,
                       0u);
-        }
+        });
         EXPECT_GT(total_gain, 0.0);
     }
 }
@@ -207,12 +196,11 @@ TEST(BvhRotator, RespectsTheDepthLimit) {
 }
 
 TEST(SelectiveRestructurer, LowersTheSahOfABadlyDegradedTree) {
-    const Mesh rest = unwelded(rest_mesh());
-    const Mesh mesh = shuffled(rest, 0.5f);
-    ObjectBvh bvh = build_object_bvh(rest);
-    const double refit_sah = refit_object_bvh(mesh, bvh);
-    const double rebuilt_sah = object_bvh_sah(build_object_bvh(mesh));
-    ASSERT_GT(refit_sah, 2.0 * rebuilt_sah) << "the shuffle should degrade the refit tree";
+    test::DegradedTree degraded = test::make_degraded_tree();
+    const Mesh& mesh = degraded.mesh;
+    ObjectBvh& bvh = degraded.bvh;
+    const double refit_sah = degraded.refit_sah;
+    ASSERT_GT(refit_sah, 2.0 * degraded.rebuilt_sah) << "the shuffle should degrade the refit tree";
     SelectiveRestructurer restructurer;
     RestructureSettings settings;
     settings.min_subtree_prims = 16;
@@ -229,16 +217,15 @@ TEST(SelectiveRestructurer, LowersTheSahOfABadlyDegradedTree) {
 
 TEST(SelectiveRestructurer, NeverRaisesTheSah) {
     const Mesh rest = rest_mesh();
-    ObjectBvh bvh = build_object_bvh(rest);
     SelectiveRestructurer restructurer;
-    for (int frame = 1; frame <= 4; ++frame) {
-        const Mesh mesh = deformed(rest, float(frame) / 4.0f);
-        const double refit_sah = refit_object_bvh(mesh, bvh);
-        RestructureSettings settings;
-        settings.min_subtree_prims = 16;
-        restructurer.restructure(mesh, bvh, settings);
-        EXPECT_LE(object_bvh_sah(bvh), refit_sah * (1.0 + 1e-6)) << "frame " << frame;
-    }
+    RestructureSettings settings;
+    settings.min_subtree_prims = 16;
+    update_through_frames(
+        rest, 4, build_object_bvh(rest), [&](const Mesh& mesh, ObjectBvh& bvh, int frame) {
+            const double refit_sah = refit_object_bvh(mesh, bvh);
+            restructurer.restructure(mesh, bvh, settings);
+            EXPECT_LE(object_bvh_sah(bvh), refit_sah * (1.0 + 1e-6)) << "frame " << frame;
+        });
 }
 
 TEST(SelectiveRestructurer, RebuildsScatteredPreSplitSubtreesAfterRotations) {

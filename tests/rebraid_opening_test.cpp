@@ -4,8 +4,6 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -30,6 +28,7 @@
 #include "rebraid/rebraid_builder.h"
 #include "rebraid/two_level_builder.h"
 #include "test_scenes.h"
+#include "thread_count_hash.h"
 
 namespace rebraid {
 namespace {
@@ -139,19 +138,7 @@ TEST(RebraidOpening, EveryTriangleReachableOnceAndBudgetKept) {
     }
 }
 
-std::uint64_t rebraid_hash(const Scene& scene, const std::vector<ObjectBvh>& bvhs,
-                           const RebraidSettings& settings, int threads) {
-    std::uint64_t hash = 0;
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-        const InstancedAccel accel(scene, bvhs, build_rebraid(scene, bvhs, settings).top, {});
-        hash = *accel.stats().structure_hash;
-    });
-    return hash;
-}
-
 TEST(RebraidOpening, SameStructureOnOneTwoAndEightThreads) {
-    tbb::global_control allow_eight(tbb::global_control::max_allowed_parallelism, 8);
     for (const test::NamedScene& named : opening_scenes()) {
         // The object BVHs' own determinism is rebraid_builder_test's; here the top levels.
         const std::vector<ObjectBvh> bvhs =
@@ -165,9 +152,11 @@ TEST(RebraidOpening, SameStructureOnOneTwoAndEightThreads) {
             SCOPED_TRACE(named.name + " / " + variant.name);
             // A small threshold makes the parallel opening, binning and estimate paths run.
             variant.settings.build.parallel_threshold = 64;
-            const std::uint64_t one = rebraid_hash(named.scene, bvhs, variant.settings, 1);
-            EXPECT_EQ(one, rebraid_hash(named.scene, bvhs, variant.settings, 2));
-            EXPECT_EQ(one, rebraid_hash(named.scene, bvhs, variant.settings, 8));
+            test::expect_same_hash_on_threads({1, 2, 8}, [&] {
+                const InstancedAccel accel(
+                    named.scene, bvhs, build_rebraid(named.scene, bvhs, variant.settings).top, {});
+                return *accel.stats().structure_hash;
+            });
         }
     }
 }
@@ -266,12 +255,44 @@ TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
 }
 
 TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
-    const Scene scene = test::make_overlap_scene(120, 5);
+    // The crown's small objects pack into each other: from one extra BRef per instance, each
+    // doubling of the budget opens more overlap and lowers the cost, several times over.
+    const Scene scene = generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
-    // A gain no doubling can reach: the first doubling is tried and none after it.
-    const RebraidBuild once =
-        build_rebraid(scene, bvhs, {.budget_doublings = 8, .budget_search_min_gain = 0.99f});
-    EXPECT_LE(once.budget, 8u * scene.instances.size());
+    const auto hash_of = [&](const RebraidBuild& build) {
+        const InstancedAccel accel(scene, bvhs, RebraidBuild(build).top, {});
+        return *accel.stats().structure_hash;
+    };
+    const auto cost_of = [&](const RebraidBuild& build) {
+        return absolute_cost(scene, bvhs, RebraidBuild(build).top);
+    };
+    for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
+        SCOPED_TRACE(int(rule));
+        const RebraidSettings base{.budget_factor = 1.0f, .opening_rule = rule};
+        const auto search = [&](std::uint32_t doublings, float min_gain) {
+            RebraidSettings settings = base;
+            settings.budget_doublings = doublings;
+            settings.budget_search_min_gain = min_gain;
+            return build_rebraid(scene, bvhs, settings);
+        };
+        const std::uint64_t rule_budget =
+            bref_budget(base, scene.instances.size(), scene.instanced_triangle_count());
+        // One doubling allowed: the stop rule has nothing left to stop.
+        const RebraidBuild one_doubling = search(1, 0.0f);
+        ASSERT_EQ(one_doubling.budget, 2 * rule_budget) << "the first doubling should pay here";
+        // No least gain: the search doubles on while that lowers the cost, here past the
+        // first doubling, to a cheaper top than one doubling finds.
+        const RebraidBuild unhindered = search(8, 0.0f);
+        EXPECT_GT(unhindered.budget, 2 * rule_budget);
+        EXPECT_LT(cost_of(unhindered), cost_of(one_doubling));
+        // A least gain no doubling reaches: the search tries the first doubling, keeps it (it
+        // is cheaper), and stops there although seven more doublings are allowed.
+        const RebraidBuild stopped = search(8, 0.99f);
+        EXPECT_EQ(stopped.budget, one_doubling.budget);
+        EXPECT_EQ(stopped.brefs, one_doubling.brefs);
+        EXPECT_EQ(hash_of(stopped), hash_of(one_doubling));
+        EXPECT_NE(hash_of(stopped), hash_of(unhindered));
+    }
 }
 
 TEST(RebraidOpening, LeafOpeningSplitsLeavesIntoTriangles) {
@@ -352,6 +373,31 @@ TEST(ObjectSubtreeCounts, AnyNodeNumberingAndLazyCountsAgree) {
         const std::vector<std::uint32_t> reversed_counts = subtree_prim_counts(reversed);
         for (std::uint32_t n = 0; n <= last; ++n)
             EXPECT_EQ(reversed_counts[last - n], counts[n]) << "mesh " << m << " node " << n;
+    }
+}
+
+TEST(ObjectSubtreeCounts, ItemCountsAreWholeMeshesAtTheRootAndSubtreesBelow) {
+    const Scene scene = make_default_scene();
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    const LazySubtreeCounts lazy(bvhs);
+    for (std::size_t m = 0; m < bvhs.size(); ++m) {
+        SCOPED_TRACE("mesh " + std::to_string(m));
+        const ObjectBvh& bvh = bvhs[m];
+        const auto mesh = std::uint32_t(m);
+        EXPECT_EQ(lazy.item_prim_count(mesh, bvh.root), bvh.prim_count());
+        EXPECT_EQ(lazy.item_prim_count(mesh, NodeRef::empty()), 0u);
+        if (!bvh.root.is_inner()) continue;
+        const std::vector<std::uint32_t> counts = subtree_prim_counts(bvh);
+        for (std::size_t n = 0; n < bvh.nodes.size(); ++n) {
+            const WideNode& node = bvh.nodes[n];
+            for (int slot = 0; slot < kBvhWidth && !node.children[slot].is_empty(); ++slot) {
+                const NodeRef child = node.children[slot];
+                EXPECT_EQ(lazy.item_prim_count(mesh, child),
+                          child.is_leaf() ? child.prim_count() : counts[child.node_id()]);
+            }
+        }
+        const NodeRef past_the_nodes = NodeRef::inner(std::uint32_t(bvh.nodes.size()));
+        EXPECT_THROW(lazy.item_prim_count(mesh, past_the_nodes), Error);
     }
 }
 

@@ -2,11 +2,10 @@
 // repairs a degraded tree, keeps every triangle in one leaf under boxes that contain it,
 // answers rays as Embree flat does, and gives the same tree on any thread count.
 #include <gtest/gtest.h>
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "object_bvh_checks.h"
@@ -14,6 +13,8 @@
 #include "rebraid/error.h"
 #include "rebraid/object_bvh_refit.h"
 #include "rebraid/treelet_sampling.h"
+#include "thread_count_hash.h"
+#include "update_test_scenes.h"
 
 namespace rebraid {
 namespace {
@@ -25,6 +26,7 @@ using test::rest_mesh;
 using test::shuffled;
 using test::structure_hash;
 using test::unwelded;
+using test::update_through_frames;
 
 /// Refits and samples treelets through `frames` frames of `deformed`; returns the tree.
 ObjectBvh sample_through_frames(const Mesh& rest, int frames, const TreeletSettings& settings,
@@ -32,12 +34,11 @@ ObjectBvh sample_through_frames(const Mesh& rest, int frames, const TreeletSetti
     ObjectBvh bvh = build_object_bvh(rest, build);
     TreeletSampler sampler;
     sampler.reset(bvh);
-    for (int frame = 1; frame <= frames; ++frame) {
-        const Mesh mesh = deformed(rest, float(frame) / float(frames));
-        refit_object_bvh(mesh, bvh);
-        sampler.optimize(mesh, bvh, settings);
-    }
-    return bvh;
+    return update_through_frames(rest, frames, std::move(bvh),
+                                 [&](const Mesh& mesh, ObjectBvh& tree, int) {
+                                     refit_object_bvh(mesh, tree);
+                                     sampler.optimize(mesh, tree, settings);
+                                 });
 }
 
 TEST(TreeletSampler, NeverRaisesTheSahOverRefitAlone) {
@@ -48,33 +49,33 @@ TEST(TreeletSampler, NeverRaisesTheSahOverRefitAlone) {
         TreeletSampler sampler;
         sampler.reset(bvh);
         double total_gain = 0.0;
-        for (int frame = 1; frame <= 6; ++frame) {
-            const Mesh mesh = deformed(rest, float(frame) / 6.0f);
-            const double refit_sah = refit_object_bvh(mesh, bvh);
-            const TreeletStats stats = sampler.optimize(mesh, bvh);
-            const double sah = object_bvh_sah(bvh);
-            EXPECT_LE(sah, refit_sah * (1.0 + 1e-6)) << "frame " << frame;
-            EXPECT_NEAR(stats.sah, sah, 1e-5 * sah) << "frame " << frame;
-            EXPECT_LE(stats.applied, stats.improved);
-            EXPECT_LE(stats.improved, stats.sampled);
-            total_gain += refit_sah - sah;
-            expect_valid(mesh, bvh);
-        }
+        update_through_frames(rest, 6, std::move(bvh),
+                              [&](const Mesh& mesh, ObjectBvh& tree, int frame) {
+                                  const double refit_sah = refit_object_bvh(mesh, tree);
+                                  const TreeletStats stats = sampler.optimize(mesh, tree);
+                                  const double sah = object_bvh_sah(tree);
+                                  EXPECT_LE(sah, refit_sah * (1.0 + 1e-6)) << "frame " << frame;
+                                  EXPECT_NEAR(stats.sah, sah, 1e-5 * sah) << "frame " << frame;
+                                  EXPECT_LE(stats.applied, stats.improved);
+                                  EXPECT_LE(stats.improved, stats.sampled);
+                                  total_gain += refit_sah - sah;
+                                  expect_valid(mesh, tree);
+                              });
         EXPECT_GT(total_gain, 0.0);
     }
 }
 
 TEST(TreeletSampler, RepairsABadlyDegradedTree) {
-    const Mesh rest = unwelded(rest_mesh());
-    const Mesh mesh = shuffled(rest, 0.5f);
     // One triangle per leaf: treelets move whole subtrees, so they can regroup triangles
     // only when leaves do not tie them together.
-    ObjectBvh bvh = build_object_bvh(rest, {.max_leaf_size = 1});
+    test::DegradedTree degraded = test::make_degraded_tree({.max_leaf_size = 1});
+    const Mesh& mesh = degraded.mesh;
+    ObjectBvh& bvh = degraded.bvh;
+    const double refit_sah = degraded.refit_sah;
+    ASSERT_GT(refit_sah, 2.0 * degraded.rebuilt_sah) << "the shuffle should degrade the refit tree";
+    // The sampler knows the tree as built, so it sees how much the refit grew each box.
     TreeletSampler sampler;
-    sampler.reset(bvh);
-    const double refit_sah = refit_object_bvh(mesh, bvh);
-    ASSERT_GT(refit_sah, 2.0 * object_bvh_sah(build_object_bvh(mesh)))
-        << "the shuffle should degrade the refit tree";
+    sampler.reset(degraded.built);
     TreeletSettings settings;
     settings.root_fraction = 0.5;
     // Restructurings applied over the passes (a build that rounds differently may finish the
@@ -102,14 +103,8 @@ TEST(TreeletSampler, SameStructureOnOneAndTwoThreads) {
     const Mesh rest = rest_mesh();
     TreeletSettings settings;
     settings.root_fraction = 0.3;
-    std::vector<std::uint64_t> hashes;
-    const tbb::global_control allow_two(tbb::global_control::max_allowed_parallelism, 2);
-    for (int threads : {1, 2}) {
-        tbb::task_arena arena(threads);
-        arena.execute(
-            [&] { hashes.push_back(structure_hash(sample_through_frames(rest, 4, settings))); });
-    }
-    EXPECT_EQ(hashes[0], hashes[1]);
+    test::expect_same_hash_on_threads(
+        {1, 2}, [&] { return structure_hash(sample_through_frames(rest, 4, settings)); });
 }
 
 TEST(TreeletSampler, TheSeedChangesWhichTreeletsAreDrawn) {

@@ -2,7 +2,12 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <functional>
+#include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "embree_glue/embree_bvh_builder.h"
 #include "embree_glue/embree_reference.h"
@@ -63,15 +68,21 @@ const AccelEntry& find_entry(std::string_view name) {
     throw Error("unknown accel '" + std::string(name) + "'; valid names: " + accel_names_joined());
 }
 
-/// One KEY=VALUE of a variant suffix applied to `options`.
-void apply_variant_setting(std::string_view spec, std::string_view key, std::string_view value,
-                           AccelOptions& options) {
-    const auto fail = [&](const std::string& why) -> void {
-        throw Error("accel '" + std::string(spec) + "': " + std::string(key) + "=" +
-                    std::string(value) + ": " + why);
-    };
-    const auto number = [&]() {
-        const std::string text(value);
+/// The VALUE of one KEY=VALUE of a variant suffix, with the readings the keys share; each
+/// throws rebraid::Error naming the spec, the key and the value when the value does not fit.
+class VariantValue {
+public:
+    VariantValue(std::string_view spec, std::string_view key, std::string_view value)
+        : spec_(spec), key_(key), value_(value) {}
+
+    [[noreturn]] void fail(const std::string& why) const {
+        throw Error("accel '" + std::string(spec_) + "': " + std::string(key_) + "=" +
+                    std::string(value_) + ": " + why);
+    }
+
+    /// The value as a finite float.
+    float number() const {
+        const std::string text(value_);
         std::size_t used = 0;
         float parsed = 0.0f;
         try {
@@ -82,70 +93,109 @@ void apply_variant_setting(std::string_view spec, std::string_view key, std::str
         if (used != text.size() || text.empty() || !std::isfinite(parsed))
             fail("not a finite number");
         return parsed;
-    };
-    const auto one_of = [&](auto names, auto& field) {
-        for (const auto& [name, choice] : names)
-            if (name == value) {
-                field = choice;
-                return;
-            }
-        std::string valid;
-        for (const auto& [name, choice] : names)
-            valid += (valid.empty() ? "" : ", ") + std::string(name);
-        fail("valid values: " + valid);
-    };
-    RebraidSettings& rebraid = options.rebraid;
-    if (key == "object-builder") {
-        for (ObjectBuilderKind kind : object_builder_kinds())
-            if (object_builder_name(kind) == value) {
-                options.object_builder = kind;
-                return;
-            }
-        fail("not an object builder");
-    } else if (key == "open-threshold") {
-        rebraid.open_threshold = number();
-    } else if (key == "budget-factor") {
-        rebraid.budget_factor = number();
-    } else if (key == "primitives-per-bref") {
-        rebraid.primitives_per_bref = number();
-    } else if (key == "instance-entry-cost") {
-        rebraid.instance_entry_cost = number();
-    } else if (key == "estimate-levels") {
-        const float levels = number();
-        if (levels < 0.0f || levels > 8.0f || levels != std::floor(levels))
-            fail("not a whole number in [0, 8]");
-        rebraid.estimate_levels = std::uint32_t(levels);
-    } else if (key == "budget-doublings") {
-        const float doublings = number();
-        if (doublings < 0.0f || doublings > 16.0f || doublings != std::floor(doublings))
-            fail("not a whole number in [0, 16]");
-        rebraid.budget_doublings = std::uint32_t(doublings);
-    } else if (key == "overlap-threshold") {
-        rebraid.overlap_threshold = number();
-    } else if (key == "budget-rule") {
-        one_of(std::array{std::pair{std::string_view("instances"), BudgetRule::per_instance},
-                          std::pair{std::string_view("primitives"), BudgetRule::per_primitive}},
-               rebraid.budget_rule);
-    } else if (key == "bref-bounds") {
-        std::array<std::pair<std::string_view, BRefBoundsRule>, kBRefBoundsRules.size()> names;
-        for (std::size_t i = 0; i < names.size(); ++i)
-            names[i] = {bref_bounds_rule_name(kBRefBoundsRules[i]), kBRefBoundsRules[i]};
-        one_of(names, rebraid.bounds_rule);
-    } else if (key == "opening") {
-        std::array<std::pair<std::string_view, OpeningRule>, kOpeningRules.size()> names;
-        for (std::size_t i = 0; i < names.size(); ++i)
-            names[i] = {opening_rule_name(kOpeningRules[i]), kOpeningRules[i]};
-        one_of(names, rebraid.opening_rule);
-    } else if (key == "open-leaves") {
-        one_of(std::array{std::pair{std::string_view("1"), true},
-                          std::pair{std::string_view("0"), false},
-                          std::pair{std::string_view("true"), true},
-                          std::pair{std::string_view("false"), false}},
-               rebraid.open_leaves);
-    } else {
-        throw Error("accel '" + std::string(spec) + "': unknown setting '" + std::string(key) +
-                    "'; valid keys: " + std::string(kAccelVariantKeys));
     }
+
+    /// The value as a whole number in [0, `max`].
+    std::uint32_t whole_number(std::uint32_t max) const {
+        const float parsed = number();
+        if (parsed < 0.0f || parsed > float(max) || parsed != std::floor(parsed))
+            fail("not a whole number in [0, " + std::to_string(max) + "]");
+        return std::uint32_t(parsed);
+    }
+
+    /// The choice `names` gives the value; fails with `why_none`, or by default the list of
+    /// valid values, when it names none.
+    template <class Choice>
+    Choice choice(std::span<const std::pair<std::string_view, Choice>> names,
+                  const std::string& why_none = {}) const {
+        for (const auto& [name, option] : names)
+            if (name == value_) return option;
+        if (!why_none.empty()) fail(why_none);
+        std::string valid;
+        for (const auto& name_and_choice : names)
+            valid += (valid.empty() ? "" : ", ") + std::string(name_and_choice.first);
+        fail("valid values: " + valid);
+    }
+
+private:
+    std::string_view spec_, key_, value_;
+};
+
+/// How one variant key sets AccelOptions from its value.
+using ApplySetting = std::function<void(const VariantValue&, AccelOptions&)>;
+
+ApplySetting real_number(float RebraidSettings::*field) {
+    return [field](const VariantValue& value, AccelOptions& options) {
+        options.rebraid.*field = value.number();
+    };
+}
+
+ApplySetting whole_number(std::uint32_t RebraidSettings::*field, std::uint32_t max) {
+    return [field, max](const VariantValue& value, AccelOptions& options) {
+        options.rebraid.*field = value.whole_number(max);
+    };
+}
+
+template <class Choice>
+ApplySetting named_choice(Choice RebraidSettings::*field,
+                          std::vector<std::pair<std::string_view, Choice>> names) {
+    return [field, names = std::move(names)](const VariantValue& value, AccelOptions& options) {
+        options.rebraid.*field = value.choice<Choice>(names);
+    };
+}
+
+/// Each of `choices` under the name `name_of` gives it, in the order of `choices`.
+template <class Choice, std::size_t N>
+std::vector<std::pair<std::string_view, Choice>> named(const std::array<Choice, N>& choices,
+                                                       std::string_view (*name_of)(Choice)) {
+    std::vector<std::pair<std::string_view, Choice>> names;
+    for (const Choice choice : choices) names.emplace_back(name_of(choice), choice);
+    return names;
+}
+
+struct VariantKey {
+    std::string_view key;
+    ApplySetting apply;
+};
+
+/// Every key a variant suffix accepts (kAccelVariantKeys lists them for help texts): adding
+/// one is one line here.
+const std::vector<VariantKey>& variant_keys() {
+    using Settings = RebraidSettings;
+    static const std::vector<VariantKey> keys{
+        {"object-builder",
+         [](const VariantValue& value, AccelOptions& options) {
+             options.object_builder = value.choice<ObjectBuilderKind>(
+                 named(kObjectBuilderKinds, object_builder_name), "not an object builder");
+         }},
+        {"open-threshold", real_number(&Settings::open_threshold)},
+        {"budget-factor", real_number(&Settings::budget_factor)},
+        {"budget-rule",
+         named_choice(&Settings::budget_rule, {{"instances", BudgetRule::per_instance},
+                                               {"primitives", BudgetRule::per_primitive}})},
+        {"primitives-per-bref", real_number(&Settings::primitives_per_bref)},
+        {"bref-bounds",
+         named_choice(&Settings::bounds_rule, named(kBRefBoundsRules, bref_bounds_rule_name))},
+        {"opening", named_choice(&Settings::opening_rule, named(kOpeningRules, opening_rule_name))},
+        {"open-leaves",
+         named_choice(&Settings::open_leaves,
+                      {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
+        {"instance-entry-cost", real_number(&Settings::instance_entry_cost)},
+        {"estimate-levels", whole_number(&Settings::estimate_levels, 8)},
+        {"overlap-threshold", real_number(&Settings::overlap_threshold)},
+        {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
+    };
+    return keys;
+}
+
+/// One KEY=VALUE of a variant suffix applied to `options`.
+void apply_variant_setting(std::string_view spec, std::string_view key, std::string_view value,
+                           AccelOptions& options) {
+    for (const VariantKey& variant_key : variant_keys())
+        if (variant_key.key == key)
+            return variant_key.apply(VariantValue(spec, key, value), options);
+    throw Error("accel '" + std::string(spec) + "': unknown setting '" + std::string(key) +
+                "'; valid keys: " + std::string(kAccelVariantKeys));
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,12 +74,33 @@ struct TraceTiming {
     return timing;
 }
 
+/// Work per ray of one structure on one ray set, counted in an untimed pass
+/// (Accel::intersect_counted): the deterministic side of a speed difference.
+struct TraceWork {
+    double nodes_per_ray = 0.0;
+    double triangles_per_ray = 0.0;
+    double object_entries_per_ray = 0.0;
+};
+
+/// Counts the work of closest-hit queries for `rays`, one after the other (the sums do not
+/// depend on the thread count). Empty for Embree's structures, which count nothing.
+std::optional<TraceWork> count_closest_hit_work(const Accel& accel, const std::vector<Ray>& rays) {
+    TraversalCounters counters;
+    for (const Ray& ray : rays) accel.intersect_counted(ray, &counters);
+    if (rays.empty() || counters.nodes_visited + counters.triangles_tested == 0) return {};
+    const double count = static_cast<double>(rays.size());
+    return TraceWork{static_cast<double>(counters.nodes_visited) / count,
+                     static_cast<double>(counters.triangles_tested) / count,
+                     static_cast<double>(counters.object_entries) / count};
+}
+
 /// What one structure measured on one scene.
 struct BenchResult {
     std::string scene;
     const AccelVariant* variant = nullptr;
     AccelStats stats;
     TraceTiming primary, diffuse;
+    std::optional<TraceWork> diffuse_work;
 };
 
 std::size_t active_thread_count() {
@@ -101,6 +123,14 @@ nlohmann::ordered_json result_to_json(const BenchResult& result, const BenchRays
     json["rays_diffuse"] = rays.diffuse.size();
     json["hits_primary"] = result.primary.hit_count;
     json["hits_diffuse"] = result.diffuse.hit_count;
+    // Work per diffuse ray: null where the structure cannot count it (Embree's).
+    const auto work_field = [&](double TraceWork::*field) {
+        return result.diffuse_work ? nlohmann::ordered_json(*result.diffuse_work.*field)
+                                   : nlohmann::ordered_json(nullptr);
+    };
+    json["nodes_per_diffuse_ray"] = work_field(&TraceWork::nodes_per_ray);
+    json["triangles_per_diffuse_ray"] = work_field(&TraceWork::triangles_per_ray);
+    json["object_entries_per_diffuse_ray"] = work_field(&TraceWork::object_entries_per_ray);
     json["threads"] = active_thread_count();
     json["repetitions"] = options.repetitions;
     return json;
@@ -174,12 +204,14 @@ void run_bench(const BenchOptions& options) {
         }
         if (!options.is_json) print_scene_header(scene_name, scene, rays, options, name_width);
         for (const AccelVariant& variant : variants) {
-            BenchResult result{scene_name, &variant, {}, {}, {}};
+            BenchResult result{scene_name, &variant, {}, {}, {}, {}};
             {
                 const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);
                 result.stats = accel->stats();
                 result.primary = time_closest_hits(*accel, rays.primary, options.repetitions);
                 result.diffuse = time_closest_hits(*accel, rays.diffuse, options.repetitions);
+                if (options.is_json)
+                    result.diffuse_work = count_closest_hit_work(*accel, rays.diffuse);
             }  // freed before the next structure is built
             if (options.is_json)
                 all_results.push_back(result_to_json(result, rays, options));
@@ -231,7 +263,8 @@ void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& acti
         ->capture_default_str();
     command->add_flag("--json", options->is_json,
                       "print one JSON array: an object per scene and structure (scene, accel, "
-                      "build_ms, sah, mrays_primary, mrays_diffuse, the stats fields, ...)");
+                      "build_ms, sah, mrays_primary, mrays_diffuse, the stats fields, nodes, "
+                      "triangles and object entries per diffuse ray, ...)");
     add_accel_build_options(*command, options->accel_options);
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_bench(*options); }; });
