@@ -138,7 +138,8 @@ AccelStats InstancedAccel::stats() const {
         hash.add_value(bvh.root);
         hash.add<PrimId>(bvh.prim_ids);
     }
-    memory += (object_to_world_.size() + world_to_object_.size()) * sizeof(AffineTransform);
+    memory += (object_to_world_.size() + world_to_object_.size()) * sizeof(AffineTransform) +
+              instance_is_identity_.size();
     stats.nodes = nodes;
     stats.leaves = leaves;
     stats.memory_bytes = memory;
