@@ -242,6 +242,23 @@ TEST(CliStats, DefaultNamesTheBuiltInSceneAsAnOmittedSceneDoes) {
               rebraid::make_default_scene().instances.size());
 }
 
+TEST(CliStats, JsonNamesTheObjectBuilderOfAVariant) {
+    // A variant's object-builder key overrides --object-builder: the JSON must name the
+    // builder that built the structure, and the structure must be the one that builder makes.
+    const fs::path scene = write_two_quads_gltf(scratch_dir());
+    const CommandResult variant = run_rebraid(
+        {"stats", scene.string(), "--json", "--accel", "twolevel:object-builder=embree-medium"});
+    const CommandResult option = run_rebraid({"stats", scene.string(), "--json", "--accel",
+                                              "twolevel", "--object-builder", "embree-medium"});
+    ASSERT_EQ(variant.exit_code, 0) << variant.err;
+    ASSERT_EQ(option.exit_code, 0) << option.err;
+    const nlohmann::json a = nlohmann::json::parse(variant.out);
+    const nlohmann::json b = nlohmann::json::parse(option.out);
+    EXPECT_EQ(a.at("object_builder"), "embree-medium");
+    EXPECT_EQ(b.at("object_builder"), "embree-medium");
+    EXPECT_EQ(a.at("structure_hash"), b.at("structure_hash"));
+}
+
 TEST(CliStats, TextNamesEveryCount) {
     const fs::path scene = write_two_quads_gltf(scratch_dir());
     const CommandResult result = run_rebraid({"stats", scene.string()});

@@ -50,17 +50,19 @@ void print_stats_text(std::ostream& out, const std::string& scene_name,
 }
 
 void run_stats(const StatsOptions& options) {
-    const AccelEntry& entry = find_accel(options.accel_name);
+    // The variant's own options (a NAME:KEY=VALUE suffix overrides the command line's), so the
+    // JSON names the object builder that actually built the structure.
+    options.accel_options.rebraid.validate();
+    const AccelVariant variant = parse_accel_variant(options.accel_name, options.accel_options);
     const Scene scene = load_scene(options.scene_path);
-    const std::unique_ptr<Accel> accel =
-        build_accel(options.accel_name, scene, options.accel_options);
+    const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);
     const AccelStats stats = accel->stats();
     if (options.is_json) {
         nlohmann::ordered_json json;
         json["scene"] = describe_scene(options.scene_path);
         json["accel"] = options.accel_name;
-        if (entry.has_object_bvhs)
-            json["object_builder"] = object_builder_name(options.accel_options.object_builder);
+        if (variant.entry->has_object_bvhs)
+            json["object_builder"] = object_builder_name(variant.options.object_builder);
         json.update(stats_to_json(stats));
         json["peak_rss_bytes"] = peak_rss_bytes();
         std::cout << json.dump(2) << "\n";
