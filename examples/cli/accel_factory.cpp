@@ -158,7 +158,7 @@ struct VariantKey {
     ApplySetting apply;
 };
 
-/// Every key a variant suffix accepts (kAccelVariantKeys lists them for help texts): adding
+/// Every key a variant suffix accepts (accel_variant_keys() lists them for help texts): adding
 /// one is one line here.
 const std::vector<VariantKey>& variant_keys() {
     using Settings = RebraidSettings;
@@ -195,7 +195,7 @@ void apply_variant_setting(std::string_view spec, std::string_view key, std::str
         if (variant_key.key == key)
             return variant_key.apply(VariantValue(spec, key, value), options);
     throw Error("accel '" + std::string(spec) + "': unknown setting '" + std::string(key) +
-                "'; valid keys: " + std::string(kAccelVariantKeys));
+                "'; valid keys: " + accel_variant_keys());
 }
 
 }  // namespace
@@ -300,6 +300,13 @@ AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base
     }
     variant.options.rebraid.validate();
     return variant;
+}
+
+std::string accel_variant_keys() {
+    std::string keys;
+    for (const VariantKey& variant_key : variant_keys())
+        keys += (keys.empty() ? "" : ", ") + std::string(variant_key.key);
+    return keys;
 }
 
 const AccelEntry& find_accel(std::string_view spec) {

@@ -74,7 +74,7 @@ std::string accel_names_joined();
 
 /// A structure with settings of its own: `--accel` accepts `NAME[:KEY=VALUE]...`, so that one
 /// run can compare variants, e.g. `rebraid:opening=sah:bref-bounds=children`. Keys are the
-/// build options' long names without dashes in front (kAccelVariantKeys); each overrides the
+/// build options' long names without dashes in front (accel_variant_keys()); each overrides the
 /// command line's value for this structure only.
 struct AccelVariant {
     const AccelEntry* entry = nullptr;
@@ -82,11 +82,8 @@ struct AccelVariant {
     std::string label;  ///< the whole `NAME[:KEY=VALUE]...` text, naming it in outputs
 };
 
-/// The keys a variant suffix accepts, for help texts.
-inline constexpr std::string_view kAccelVariantKeys =
-    "object-builder, open-threshold, budget-factor, budget-rule, primitives-per-bref, "
-    "bref-bounds, opening, open-leaves, instance-entry-cost, estimate-levels, overlap-threshold, "
-    "budget-doublings";
+/// The keys a variant suffix accepts, joined with ", " (for help texts and error messages).
+std::string accel_variant_keys();
 
 /// Parses `spec` (`NAME[:KEY=VALUE]...`) on top of `base`; throws rebraid::Error naming the
 /// spec and the bad name, key or value. The settings are validated.

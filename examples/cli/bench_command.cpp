@@ -245,7 +245,7 @@ void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& acti
                          "); NAME:KEY=VALUE[:KEY=VALUE...] is a variant with its own build "
                          "options, named so in the output, e.g. "
                          "twolevel,rebraid,rebraid:opening=sah:bref-bounds=children; keys: " +
-                         std::string(kAccelVariantKeys))
+                         accel_variant_keys())
         ->delimiter(',')
         ->type_name("LIST");
     command

@@ -23,7 +23,7 @@ void add_accel_option(CLI::App& command, std::string& accel_name) {
                         std::string(kDefaultAccelName) +
                         "); NAME:KEY=VALUE[:KEY=VALUE...] overrides build options for it, "
                         "keys: " +
-                        std::string(kAccelVariantKeys))
+                        accel_variant_keys())
         ->type_name("NAME");
 }
 
