@@ -38,6 +38,21 @@ public:
             lanes_[count_++] = first + i;
         }
     }
+    /// Adds the triangles of the leaves bit i of `slots` selects in `refs` (counting them in
+    /// `counters`, when given), calling `test()` whenever the lanes fill and once at the end
+    /// for the rest; stops adding leaves once `is_done()` (any-hit queries: a hit was found).
+    /// Both object-BVH queries visit sibling leaves this way (LeafVisits::with_siblings).
+    template <class Test, class IsDone>
+    void add_leaves_and_test(const NodeRef* refs, unsigned slots, TraversalCounters* counters,
+                             Test&& test, IsDone&& is_done) {
+        do {
+            const NodeRef leaf = refs[std::countr_zero(slots)];
+            slots &= slots - 1;
+            if (counters) counters->triangles_tested += leaf.prim_count();
+            add(leaf, test);
+        } while (slots && !is_done());
+        test();
+    }
     std::uint32_t count() const { return count_; }
     const TriangleVerts* const* lanes() const { return lanes_; }
     /// Leaf-order position of the triangle in `lane`.
@@ -83,13 +98,7 @@ bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, Traver
     };
     // Sibling leaves together (LeafVisits::with_siblings): their triangles share tests.
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
-        do {
-            const NodeRef leaf = refs[std::countr_zero(slots)];
-            slots &= slots - 1;
-            if (counters) counters->triangles_tested += leaf.prim_count();
-            lanes.add(leaf, test_lanes);
-        } while (slots);
-        test_lanes();
+        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [] { return false; });
         return false;
     };
     traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
@@ -127,13 +136,7 @@ inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalRa
         lanes.clear();
     };
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
-        do {
-            const NodeRef leaf = refs[std::countr_zero(slots)];
-            slots &= slots - 1;
-            if (counters) counters->triangles_tested += leaf.prim_count();
-            lanes.add(leaf, test_lanes);
-        } while (slots && !is_occluded);
-        test_lanes();
+        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [&] { return is_occluded; });
         return is_occluded;
     };
     // Any order: the first hit ends the query, and sorting the children costs more than the
