@@ -166,22 +166,9 @@ inline TriangleGroupHit closest_lane(const GroupTest& test) {
 
 }  // namespace triangle_group_detail
 
-/// Closest hit among the `count` (1..8) consecutive triangles at `tris` with
-/// tnear <= t <= tfar; on a tie the lower index wins. Returns false when none is hit.
-inline bool intersect_triangle_group(const TriangleVerts* tris, std::uint32_t count,
-                                     const TriangleGroupRay& ray, float tnear, float tfar,
-                                     TriangleGroupHit& hit) {
-    using namespace triangle_group_detail;
-    const GroupCorners corners([tris](std::uint32_t i) { return tris + i; }, count);
-    const GroupTest test(corners, count, ray, tnear, tfar);
-    if (test.mask == 0) return false;
-    hit = closest_lane(test);
-    return true;
-}
-
-/// Same as intersect_triangle_group for `count` (1..8) triangles from anywhere, `lanes[i]`
-/// pointing at the i-th (e.g. the triangles of several small leaves, tested together);
-/// hit.index is the lane.
+/// Closest hit among `count` (1..8) triangles from anywhere, `lanes[i]` pointing at the i-th
+/// (e.g. the triangles of several small leaves, tested together), with tnear <= t <= tfar;
+/// hit.index is the lane, and on a tie the lower lane wins. Returns false when none is hit.
 inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
                                      const TriangleGroupRay& ray, float tnear, float tfar,
                                      TriangleGroupHit& hit) {
@@ -193,15 +180,8 @@ inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uin
     return true;
 }
 
-/// True when the ray hits any of the `count` (1..8) triangles at `tris` within [tnear, tfar].
-inline bool occluded_triangle_group(const TriangleVerts* tris, std::uint32_t count,
-                                    const TriangleGroupRay& ray, float tnear, float tfar) {
-    using namespace triangle_group_detail;
-    const GroupCorners corners([tris](std::uint32_t i) { return tris + i; }, count);
-    return GroupTest(corners, count, ray, tnear, tfar).mask != 0;
-}
-
-/// Same as occluded_triangle_group for triangles from anywhere (see intersect_triangle_lanes).
+/// True when the ray hits any of the `count` (1..8) triangles `lanes` points at within
+/// [tnear, tfar].
 inline bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
                                     const TriangleGroupRay& ray, float tnear, float tfar) {
     using namespace triangle_group_detail;
@@ -217,37 +197,13 @@ struct TriangleGroupRay {
     TriangleGroupRay(Vec3f origin, Vec3f direction) : org(origin), dir(direction) {}
 };
 
-inline bool intersect_triangle_group(const TriangleVerts* tris, std::uint32_t count,
-                                     const TriangleGroupRay& ray, float tnear, float tfar,
-                                     TriangleGroupHit& hit) {
-    bool found = false;
-    for (std::uint32_t i = 0; i < count; ++i) {
-        float t, u, v;
-        // Strictly closer hits only, so ties go to the lower index as in the SIMD path.
-        if (intersect_triangle(tris[i], ray.org, ray.dir, tnear, tfar, t, u, v) &&
-            (!found || t < hit.t)) {
-            hit = {i, t, u, v};
-            found = true;
-        }
-    }
-    return found;
-}
-
-inline bool occluded_triangle_group(const TriangleVerts* tris, std::uint32_t count,
-                                    const TriangleGroupRay& ray, float tnear, float tfar) {
-    for (std::uint32_t i = 0; i < count; ++i) {
-        float t, u, v;
-        if (intersect_triangle(tris[i], ray.org, ray.dir, tnear, tfar, t, u, v)) return true;
-    }
-    return false;
-}
-
 inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
                                      const TriangleGroupRay& ray, float tnear, float tfar,
                                      TriangleGroupHit& hit) {
     bool found = false;
     for (std::uint32_t i = 0; i < count; ++i) {
         float t, u, v;
+        // Strictly closer hits only, so ties go to the lower lane as in the SIMD path.
         if (intersect_triangle(*lanes[i], ray.org, ray.dir, tnear, tfar, t, u, v) &&
             (!found || t < hit.t)) {
             hit = {i, t, u, v};
