@@ -2,7 +2,7 @@
 // own scene build (rtcCommitScene, medium quality) on the same world-space triangles, at 1 and
 // 2 threads. Reports Mprims/s (and, for the own builder, the tree's SAH). Also the top-level
 // builds alone (object BVHs built once beforehand): the plain two-level top, the re-braided
-// top under the paper's rule and under the SAH-aware rule (issue 5's "top build <= 2x
+// top under the paper's rule and under the SAH-aware rule (the target "top build <= 2x
 // twolevel"), reporting the top's items and the time per item.
 //
 // Usage: bench_build [--scene-dir=DIR] [--top-scene=FILE ...] [Google Benchmark flags, e.g.
@@ -30,16 +30,16 @@
 #include <utility>
 #include <vector>
 
-#include "embree_glue/embree_device.h"
-#include "rebraid/bvh_stats.h"
-#include "rebraid/default_scene.h"
-#include "rebraid/gltf_scene.h"
-#include "rebraid/object_bvh.h"
-#include "rebraid/object_bvh_set.h"
-#include "rebraid/rebraid_builder.h"
-#include "rebraid/scene.h"
-#include "rebraid/two_level_builder.h"
-#include "rebraid/wide_bvh_builder.h"
+#include "embree_glue/reference/embree_device.h"
+#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/object_bvh_builder.h"
+#include "rebraid/bvh/wide_bvh_builder.h"
+#include "rebraid/core/scene.h"
+#include "rebraid/generators/default_scene.h"
+#include "rebraid/io/gltf_scene.h"
+#include "rebraid/rebraiding/rebraid_builder.h"
+#include "rebraid/top_level/bvh_stats.h"
+#include "rebraid/top_level/two_level_builder.h"
 
 namespace {
 

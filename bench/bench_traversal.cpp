@@ -1,6 +1,6 @@
 // Single-ray traversal speed (Mrays/s) of the project's structures against Embree's, on the
 // same rays: primary rays of a camera framing each scene, and incoherent random rays
-// (rebraid/random_rays.h), for closest hits and occlusion. Scenes: the default scene and
+// (rebraid/generators/random_rays.h), for closest hits and occlusion. Scenes: the default scene and
 // every .glb of the scene folder.
 //
 //   bench_traversal [--scene-dir DIR] [--rays N] [--threads N] [--rounds N]
@@ -38,13 +38,13 @@
 #include <string>
 #include <vector>
 
-#include "embree_glue/embree_reference.h"
-#include "rebraid/default_scene.h"
-#include "rebraid/error.h"
-#include "rebraid/flat_accel.h"
-#include "rebraid/gltf_scene.h"
-#include "rebraid/instanced_accel.h"
-#include "rebraid/random_rays.h"
+#include "embree_glue/reference/embree_reference.h"
+#include "rebraid/core/error.h"
+#include "rebraid/generators/default_scene.h"
+#include "rebraid/generators/random_rays.h"
+#include "rebraid/io/gltf_scene.h"
+#include "rebraid/top_level/flat_accel.h"
+#include "rebraid/top_level/instanced_accel.h"
 
 namespace rebraid {
 namespace {

@@ -36,10 +36,11 @@
 #include <string>
 #include <vector>
 
-#include "rebraid/bvh_stats.h"
-#include "rebraid/mesh_generators.h"
-#include "rebraid/object_bvh_update.h"
-#include "rebraid/random.h"
+#include "rebraid/bvh/object_bvh_builder.h"
+#include "rebraid/core/random.h"
+#include "rebraid/dynamic/object_bvh_update.h"
+#include "rebraid/generators/mesh_generators.h"
+#include "rebraid/top_level/bvh_stats.h"
 
 namespace {
 

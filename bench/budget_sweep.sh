@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Issue 10, budget policy: exact SAH of the paper's rules and of the default rules for budget
+# Budget policy: exact SAH of the paper's rules and of the default rules for budget
 # factors 1..64, the per-primitive rule and the budget search, one `rebraid bench` per scene
 # (16 rays: the SAH is what counts here). Writes OUT_DIR/SCENE.json; bench/budget_table.py
-# OUT_DIR prints the tables of bench/RESULTS.md ("Issue 10: budget policy").
+# OUT_DIR prints the tables of bench/RESULTS.md (budget policy).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/eval/budget}

@@ -10,7 +10,7 @@
                                            and against the budget factor, and a plot
   evaluate.py plot --json SWEEP.json --plot P.png   the plot again from a sweep's raw results
   evaluate.py compare SCENE... --accel LIST [--baseline NAME] [--rounds K]
-                                           variants side by side (issue 10): SAH, Mrays/s and
+                                           variants side by side: SAH, Mrays/s and
                                            top build ms per scene, ratios to the baseline
 
 Every number comes from one `rebraid bench` run per scene (and per setting in the sweep), so
@@ -28,7 +28,7 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BINARY = os.path.join(HERE, "..", "build", "examples", "rebraid")
 # The paper's rules alone (extent opening, transformed node boxes); plain `rebraid` is the
-# project's default, which adds issue 10's sah opening and vertex bounds.
+# project's default, which adds the sah opening and vertex bounds.
 PAPER = "rebraid:opening=extent:bref-bounds=box"
 # The paper's budget for trees built over objects (§5.2: #primitives / 1000) rather than over
 # instances (4 x #instances, the default): its choice for scenes like powerplant and crown.

@@ -15,7 +15,7 @@
 #          sources), the executables labelled `tsan` (target `tsan_tests`: every one whose code
 #          runs on several threads) and their tests except the labels `slow` and `memory`,
 #          with the tests made once per shared scene on the four smallest scenes only.
-# tests/RELIABILITY.md explains the choices, the suppressions and the times.
+# docs/testing.md explains the choices, the suppressions and the times.
 # The build folder is build-asan/ or build-tsan/ ($REBRAID_SANITIZER_BUILD overrides it).
 # Installs dependencies first, like scripts/run-tests.sh. Exits non-zero on any failure or
 # sanitizer report.
@@ -89,7 +89,7 @@ case "$mode" in
         # the determinism tests still loop over every scene). Two `animate` tests run
         # Embree's methods and the project's in one process, where a TBB worker's late read
         # of a context Embree put on the stack is reported without a stack to suppress it
-        # by (tests/RELIABILITY.md); the other animate tests and dynamic_frames_test run
+        # by (docs/testing.md); the other animate tests and dynamic_frames_test run
         # the same project code.
         large_scenes='/(armadillo|brainstem|bunny|cg57_cruiser|two_cylinder_engine)( |$)'
         embree_and_own='^AnimateCommand\.(JsonHasOneObjectPerMethodWithTheSummaryKeys|PlotWritesAPng)$'

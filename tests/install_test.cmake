@@ -4,7 +4,9 @@
 #   2. configure examples/dropin against it with find_package(rebraid CONFIG REQUIRED);
 #   3. build it and run `dropin_example --check`, which traces the same rays through Embree,
 #      EmbreeAccel and the user-geometry scene, before and after an update;
-#   4. run the installed `rebraid` command.
+#   4. configure, build and run examples/minimal (the library alone, <rebraid/rebraid.h>);
+#   5. run the installed `rebraid` command.
+# Only public headers are installed: a builder internal must be missing from the prefix.
 # Inputs: REBRAID_BUILD_DIR, REBRAID_SOURCE_DIR, REBRAID_WORK_DIR, REBRAID_GENERATOR.
 foreach(variable REBRAID_BUILD_DIR REBRAID_SOURCE_DIR REBRAID_WORK_DIR REBRAID_GENERATOR)
     if(NOT DEFINED ${variable})
@@ -28,10 +30,18 @@ function(run step)
 endfunction()
 
 run("install" ${CMAKE_COMMAND} --install ${REBRAID_BUILD_DIR} --prefix ${prefix})
-foreach(installed include/rebraid/embree.h include/rebraid/scene.h
-        include/embree_glue/embree_accel.h lib/cmake/rebraid/rebraidConfig.cmake bin/rebraid)
+foreach(installed include/rebraid/embree.h include/rebraid/rebraid.h include/rebraid/core/scene.h
+        include/rebraid/rebraiding/rebraid_accel.h include/embree_glue/dropin/embree_accel.h
+        lib/cmake/rebraid/rebraidConfig.cmake bin/rebraid)
     if(NOT EXISTS ${prefix}/${installed})
         message(FATAL_ERROR "install: ${prefix}/${installed} is missing")
+    endif()
+endforeach()
+
+foreach(internal include/rebraid/rebraiding/bref_opening.h include/rebraid/bvh/binned_split.h
+        include/rebraid/bvh/wide_tree_grower.h)
+    if(EXISTS ${prefix}/${internal})
+        message(FATAL_ERROR "install: the internal header ${internal} was installed")
     endif()
 endforeach()
 
@@ -44,4 +54,12 @@ if(NOT last_output MATCHES "check passed")
     message(FATAL_ERROR "dropin_example --check did not pass:\n${last_output}")
 endif()
 message(STATUS "${last_output}")
+set(minimal ${REBRAID_WORK_DIR}/minimal)
+run("configure the minimal example" ${CMAKE_COMMAND} -S ${REBRAID_SOURCE_DIR}/examples/minimal
+    -B ${minimal} -G ${REBRAID_GENERATOR} -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix})
+run("build the minimal example" ${CMAKE_COMMAND} --build ${minimal})
+run("run the minimal example" ${minimal}/minimal_example)
+if(NOT last_output MATCHES "t 1, instance 0, primitive 1")
+    message(FATAL_ERROR "minimal_example printed something else:\n${last_output}")
+endif()
 run("run the installed rebraid command" ${prefix}/bin/rebraid --help)

@@ -9,12 +9,13 @@
 #include <utility>
 #include <vector>
 
-#include "embree_glue/embree_bvh_builder.h"
-#include "embree_glue/embree_reference.h"
-#include "rebraid/error.h"
-#include "rebraid/flat_accel.h"
-#include "rebraid/instanced_accel.h"
-#include "rebraid/rebraid_builder.h"
+#include "embree_glue/reference/embree_bvh_builder.h"
+#include "embree_glue/reference/embree_reference.h"
+#include "rebraid/core/error.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/rebraiding/rebraid_builder.h"
+#include "rebraid/top_level/flat_accel.h"
+#include "rebraid/top_level/instanced_accel.h"
 
 namespace rebraid::cli {
 

@@ -6,10 +6,10 @@
 #include <string_view>
 #include <vector>
 
-#include "rebraid/accel.h"
-#include "rebraid/object_bvh_set.h"
-#include "rebraid/rebraid_settings.h"
-#include "rebraid/scene.h"
+#include "rebraid/bvh/object_bvh_builder.h"
+#include "rebraid/core/accel.h"
+#include "rebraid/core/scene.h"
+#include "rebraid/rebraiding/rebraid_settings.h"
 
 namespace rebraid::cli {
 

@@ -1,4 +1,4 @@
-// `rebraid animate`: the dynamic-in-static frame benchmark (issue 6). Copies of an animated
+// `rebraid animate`: the dynamic-in-static frame benchmark. Copies of an animated
 // object stand in a static scene; every frame poses them, brings each method's structure up
 // to date and renders one frame (primary rays plus one diffuse bounce) through it.
 #include <tbb/blocked_range.h>
@@ -18,14 +18,15 @@
 #include "animate_output.h"
 #include "bench_rays.h"
 #include "commands.h"
-#include "embree_glue/embree_dynamic_scene.h"
+#include "embree_glue/reference/embree_dynamic_scene.h"
 #include "output_file.h"
-#include "rebraid/dynamic_scene.h"
-#include "rebraid/dynamic_scene_accel.h"
-#include "rebraid/error.h"
-#include "rebraid/gltf_dynamic_object.h"
+#include "rebraid/core/error.h"
+#include "rebraid/dynamic/dynamic_scene.h"
+#include "rebraid/dynamic/dynamic_scene_accel.h"
+#include "rebraid/generators/twisting_object.h"
+#include "rebraid/io/gltf_dynamic_object.h"
+#include "rebraid/render/progress.h"
 #include "scene_source.h"
-#include "viewer/progress.h"
 
 namespace rebraid::cli {
 

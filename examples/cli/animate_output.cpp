@@ -9,7 +9,7 @@
 #include <ostream>
 #include <sstream>
 
-#include "rebraid/error.h"
+#include "rebraid/core/error.h"
 
 namespace rebraid::cli {
 

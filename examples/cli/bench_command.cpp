@@ -17,7 +17,7 @@
 #include "accel_factory.h"
 #include "bench_rays.h"
 #include "commands.h"
-#include "embree_glue/embree_reference.h"
+#include "embree_glue/reference/embree_reference.h"
 #include "scene_source.h"
 #include "stats_json.h"
 

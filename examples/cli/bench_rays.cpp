@@ -7,10 +7,10 @@
 #include <cmath>
 #include <string>
 
-#include "rebraid/error.h"
-#include "rebraid/random.h"
-#include "viewer/camera.h"
-#include "viewer/shading.h"
+#include "rebraid/core/error.h"
+#include "rebraid/core/random.h"
+#include "rebraid/render/camera.h"
+#include "rebraid/render/shading.h"
 
 namespace rebraid::cli {
 

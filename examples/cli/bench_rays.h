@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "rebraid/accel.h"
-#include "rebraid/ray.h"
-#include "rebraid/scene.h"
+#include "rebraid/core/accel.h"
+#include "rebraid/core/ray.h"
+#include "rebraid/core/scene.h"
 
 namespace rebraid::cli {
 

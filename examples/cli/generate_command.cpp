@@ -12,8 +12,8 @@
 
 #include "commands.h"
 #include "output_file.h"
-#include "rebraid/gltf_writer.h"
-#include "rebraid/scene_generators.h"
+#include "rebraid/generators/scene_generators.h"
+#include "rebraid/io/gltf_writer.h"
 
 namespace rebraid::cli {
 

@@ -6,7 +6,7 @@
 #include <optional>
 
 #include "commands.h"
-#include "rebraid/error.h"
+#include "rebraid/core/error.h"
 
 int main(int argc, char** argv) {
     using namespace rebraid::cli;

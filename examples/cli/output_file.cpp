@@ -4,7 +4,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "rebraid/error.h"
+#include "rebraid/core/error.h"
 
 namespace rebraid::cli {
 

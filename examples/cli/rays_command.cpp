@@ -7,8 +7,8 @@
 
 #include "commands.h"
 #include "output_file.h"
-#include "rebraid/random_rays.h"
-#include "rebraid/ray_file.h"
+#include "rebraid/generators/random_rays.h"
+#include "rebraid/io/ray_file.h"
 #include "scene_source.h"
 
 namespace rebraid::cli {

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "rebraid/default_scene.h"
-#include "rebraid/error.h"
-#include "rebraid/gltf_animation.h"
-#include "rebraid/gltf_scene.h"
+#include "rebraid/core/error.h"
+#include "rebraid/generators/default_scene.h"
+#include "rebraid/io/gltf_animation.h"
+#include "rebraid/io/gltf_scene.h"
 
 namespace rebraid::cli {
 

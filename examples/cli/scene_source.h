@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "rebraid/scene.h"
+#include "rebraid/core/scene.h"
 
 namespace rebraid::cli {
 

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <type_traits>
 
-#include "rebraid/accel.h"
+#include "rebraid/core/accel.h"
 
 namespace rebraid::cli {
 

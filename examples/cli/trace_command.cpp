@@ -10,7 +10,7 @@
 #include "accel_factory.h"
 #include "commands.h"
 #include "output_file.h"
-#include "rebraid/ray_file.h"
+#include "rebraid/io/ray_file.h"
 #include "scene_source.h"
 
 namespace rebraid::cli {

@@ -2,15 +2,14 @@
 
 // Compares one structure's answers with a reference's (Embree flat) ray by ray, without
 // GoogleTest, so the libFuzzer target and the randomized tests share one definition of
-// "disagree". Tolerances as tests/hit_comparison.h: t within 1e-4 relative plus a few ulps of
-// the scene's magnitude. A ray whose closer hit is fragile may differ: near an edge
-// (barycentric < 1e-2), on a sliver triangle (area below 1e-2 of its longest edge squared) or
-// at a grazing angle (|cos| between ray and normal < 1e-2). There, whether and where the
-// triangle is hit depends on rounding that differs between world-space vertices (flat
-// structures) and object-space vertices behind a transform (instanced ones); the fuzzed
-// scenes, with their quantised, often nearly degenerate triangles, hit such cases all the
-// time, so the margins are wider than tests/hit_comparison.h's. A hit within rounding of
-// tnear is fragile too.
+// "disagree". Tolerances as tests/support/hit_comparison.h: t within 1e-4 relative plus a few ulps
+// of the scene's magnitude. A ray whose closer hit is fragile may differ: near an edge (barycentric
+// < 1e-2), on a sliver triangle (area below 1e-2 of its longest edge squared) or at a grazing angle
+// (|cos| between ray and normal < 1e-2). There, whether and where the triangle is hit depends on
+// rounding that differs between world-space vertices (flat structures) and object-space vertices
+// behind a transform (instanced ones); the fuzzed scenes, with their quantised, often nearly
+// degenerate triangles, hit such cases all the time, so the margins are wider than
+// tests/support/hit_comparison.h's. A hit within rounding of tnear is fragile too.
 
 #include <algorithm>
 #include <cmath>
@@ -18,8 +17,8 @@
 #include <sstream>
 #include <string>
 
-#include "rebraid/accel.h"
-#include "rebraid/scene.h"
+#include "rebraid/core/accel.h"
+#include "rebraid/core/scene.h"
 
 namespace rebraid::fuzz {
 

@@ -1,4 +1,4 @@
-// libFuzzer target: build every project structure (flat, twolevel, rebraid with the paper's
+// libFuzzer target: build every project structure (flat, twolevel, rebraid with the default
 // settings and with opening forced everywhere) over a scene decoded from the fuzzer's bytes
 // (fuzzed_scene.h) and check its answers against Embree flat (answer_check.h). Any
 // disagreement, crash or exception other than a documented rejection aborts.
@@ -11,12 +11,13 @@
 #include <memory>
 
 #include "answer_check.h"
-#include "embree_glue/embree_reference.h"
+#include "embree_glue/reference/embree_reference.h"
 #include "fuzzed_scene.h"
-#include "rebraid/error.h"
-#include "rebraid/flat_accel.h"
-#include "rebraid/instanced_accel.h"
-#include "rebraid/rebraid_builder.h"
+#include "rebraid/core/error.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/rebraiding/rebraid_builder.h"
+#include "rebraid/top_level/flat_accel.h"
+#include "rebraid/top_level/instanced_accel.h"
 
 namespace {
 
@@ -42,8 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     expect_agreement(scene, reference, rebraid::FlatAccel(scene), fuzzed.rays, "flat");
     expect_agreement(scene, reference, rebraid::build_two_level_accel(scene), fuzzed.rays,
                      "twolevel");
-    expect_agreement(scene, reference, rebraid::build_rebraid_accel(scene), fuzzed.rays,
-                     "rebraid");
+    expect_agreement(scene, reference, rebraid::build_rebraid_accel(scene), fuzzed.rays, "rebraid");
     const rebraid::RebraidSettings open_everything{.open_threshold = 0.0f, .budget_factor = 64.0f};
     expect_agreement(
         scene, reference,

@@ -9,8 +9,8 @@
 #include <fstream>
 #include <string>
 
-#include "rebraid/error.h"
-#include "rebraid/gltf_scene.h"
+#include "rebraid/core/error.h"
+#include "rebraid/io/gltf_scene.h"
 
 namespace {
 

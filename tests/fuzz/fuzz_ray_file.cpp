@@ -1,4 +1,4 @@
-// libFuzzer target: the ray-file reader (rebraid/ray_file.h) on arbitrary text.
+// libFuzzer target: the ray-file reader (rebraid/io/ray_file.h) on arbitrary text.
 // Every input must either throw rebraid::Error or give rays that satisfy the documented
 // rules, and those rays must survive write_rays -> read_rays unchanged.
 #include <cmath>
@@ -9,16 +9,17 @@
 #include <string>
 #include <vector>
 
-#include "rebraid/error.h"
-#include "rebraid/ray_file.h"
+#include "rebraid/core/error.h"
+#include "rebraid/io/ray_file.h"
 
 namespace {
 
 /// The rules read_rays promises for every ray it returns (ray_file.h).
 bool follows_rules(const rebraid::Ray& ray) {
     const bool zero_dir = ray.dir.x == 0.0f && ray.dir.y == 0.0f && ray.dir.z == 0.0f;
-    return rebraid::is_finite(ray.org) && rebraid::is_finite(ray.dir) && !zero_dir && std::isfinite(ray.tnear) &&
-           ray.tnear >= 0.0f && !std::isnan(ray.tfar) && ray.tfar != -INFINITY;
+    return rebraid::is_finite(ray.org) && rebraid::is_finite(ray.dir) && !zero_dir &&
+           std::isfinite(ray.tnear) && ray.tnear >= 0.0f && !std::isnan(ray.tfar) &&
+           ray.tfar != -INFINITY;
 }
 
 bool same_bits(const rebraid::Ray& a, const rebraid::Ray& b) {

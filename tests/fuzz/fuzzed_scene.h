@@ -3,8 +3,8 @@
 // Turns a byte string into a small scene and rays that exercise the structures: random
 // meshes (degenerate and coplanar triangles included), instances with shears, mirroring and
 // non-uniform scales, one global scale from 2^-20 to 2^20. The libFuzzer target
-// (fuzz_build_trace.cpp) feeds it the fuzzer's bytes; tests/randomized_scenes_test.cpp feeds
-// it bytes from a seeded generator. Header-only so both build without an extra library.
+// (fuzz_build_trace.cpp) feeds it the fuzzer's bytes; tests/top_level/randomized_scenes_test.cpp
+// feeds it bytes from a seeded generator. Header-only so both build without an extra library.
 
 #include <algorithm>
 #include <array>
@@ -14,8 +14,8 @@
 #include <span>
 #include <vector>
 
-#include "rebraid/random_rays.h"
-#include "rebraid/scene.h"
+#include "rebraid/core/scene.h"
+#include "rebraid/generators/random_rays.h"
 
 namespace rebraid::fuzz {
 

@@ -1,0 +1,250 @@
+#!/usr/bin/env python3
+"""Run the benchmarks and write their raw results to bench/results/ (bench/report.py turns
+them into bench/RESULTS.md).
+
+  python3 bench/collect.py                       every suite, 5 rounds, into bench/results/
+  python3 bench/collect.py --suite scenes        one suite (repeatable)
+  python3 bench/collect.py --quick --out DIR     tiny ray counts and one round, to test the
+                                                 pipeline (without --out: a new temporary folder)
+
+Suites (every command runs from the repository root):
+
+  scenes     `rebraid bench SCENE --json` for the built-in default scene and every
+             ../shared/scenes/*.glb, with the default structures (embree-flat,
+             embree-instanced, flat, twolevel, rebraid) and the paper's rules
+             (rebraid:opening=extent:bref-bounds=box)
+  generated  the same for `rebraid generate KIND` (trees, crown, powerplant, city; the kinds'
+             defaults), written to a temporary folder first
+  animate    `rebraid animate --json`: the built-in twisting object in the default scene, and
+             each animated shared scene (per ../shared/scenes/MANIFEST.md) as --dynamic in
+             ../shared/scenes/cg57_cruiser.glb
+
+A round runs every command of a suite once, each as its own process on the same rays and
+seeds; --rounds K repeats that K times (report.py prints medians over the rounds). Each
+command's result is one JSON file, SUITE/NAME.rROUND.json, holding the command (argv, paths
+relative to the repository root), the commit, the machine, the date, the round and the parsed
+output. Collecting a suite first deletes that suite's earlier files in the output folder.
+
+Time on a 2-core machine (AMD EPYC, 24 GiB), idle: one round takes about 2.5 min for
+`scenes`, 2 min for `generated` and 1.5 min for `animate`, so the full default collection
+(all suites, 5 rounds) takes about 30 minutes. Run it on an otherwise idle machine: the
+builds and the rays use every core.
+"""
+import argparse
+import datetime
+import glob
+import json
+import os
+import re
+import shutil
+import sys
+import tempfile
+import time
+
+from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENES,
+                        commit_info, load_average, machine_info, relative_to_repo, repo_path,
+                        run, run_json, scene_name)
+
+SUITES = ["scenes", "generated", "animate"]
+GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
+ANIMATE_STATIC = f"{SHARED_SCENES}/cg57_cruiser.glb"
+# Used when the MANIFEST cannot be read: the shared scenes it lists with an animation.
+ANIMATED_FALLBACK = ["brainstem", "motion_capture_rom", "animated_morph_cube"]
+# Stands for the temporary folder of the generated scenes in recorded commands.
+TMP = "TMP"
+
+# Ray counts and repetitions: a full collection (all suites, 5 rounds) fits in ~30 minutes on
+# 2 cores; --quick only checks that the pipeline runs.
+FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": []}
+QUICK = {"rays": 2000, "repetitions": 1, "frames": 2, "animate": ["--width", "64", "--height", "36"]}
+
+
+def shared_scenes():
+    return sorted(relative_to_repo(p) for p in
+                  glob.glob(os.path.join(repo_path(SHARED_SCENES), "*.glb")))
+
+
+def animated_shared_scenes():
+    """Shared scenes whose MANIFEST row names an animation (its 'animation' column is not
+    'none')."""
+    names = []
+    try:
+        with open(repo_path(f"{SHARED_SCENES}/MANIFEST.md")) as f:
+            lines = f.read().splitlines()
+    except OSError:
+        lines = []
+    header = None
+    for line in lines:
+        if not line.startswith("|"):
+            header = None if not line.strip() else header
+            continue
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if header is None:
+            header = [c.lower() for c in cells]
+            continue
+        if set("".join(cells)) <= set("-: ") or "file" not in header or "animation" not in header:
+            continue
+        file, animation = cells[header.index("file")], cells[header.index("animation")]
+        if file.endswith(".glb") and animation and animation.lower() != "none":
+            names.append(scene_name(file))
+    names = names or ANIMATED_FALLBACK
+    return [f"{SHARED_SCENES}/{n}.glb" for n in names
+            if os.path.exists(repo_path(f"{SHARED_SCENES}/{n}.glb"))]
+
+
+def bench_command(scene, settings, threads):
+    argv = [BINARY, "bench", scene, "--accel", ",".join(DEFAULT_ACCELS + [PAPER]),
+            "--rays", str(settings["rays"]), "--repetitions", str(settings["repetitions"]), "--json"]
+    return argv + (["--threads", str(threads)] if threads is not None else [])
+
+
+def animate_command(static, dynamic, settings, threads):
+    argv = [BINARY, "animate"]
+    if static:
+        argv += ["--static", static]
+    if dynamic:
+        argv += ["--dynamic", dynamic]
+    argv += ["--frames", str(settings["frames"]), *settings["animate"], "--json"]
+    return argv + (["--threads", str(threads)] if threads is not None else [])
+
+
+def jobs_of(suite, settings, threads):
+    """The suite's (name, argv, setup argvs) triples; argv may name files under TMP/."""
+    if suite == "scenes":
+        return [(scene_name(s), bench_command(s, settings, threads), [])
+                for s in ["default"] + shared_scenes()]
+    if suite == "generated":
+        jobs = []
+        for kind in GENERATED_KINDS:
+            generate = [BINARY, "generate", kind, "-o", f"{TMP}/{kind}.glb"]
+            if threads is not None:
+                generate += ["--threads", str(threads)]
+            jobs.append((kind, bench_command(f"{TMP}/{kind}.glb", settings, threads), [generate]))
+        return jobs
+    if suite == "animate":
+        jobs = [("default", animate_command(None, None, settings, threads), [])]
+        static = ANIMATE_STATIC if os.path.exists(repo_path(ANIMATE_STATIC)) else None
+        for dynamic in animated_shared_scenes():
+            name = f"{scene_name(dynamic)}-in-{scene_name(static) if static else 'default'}"
+            jobs.append((name, animate_command(static, dynamic, settings, threads), []))
+        return jobs
+    raise ValueError(suite)
+
+
+def substitute(argv, tmp):
+    return [a.replace(f"{TMP}/", tmp + "/", 1) if a.startswith(f"{TMP}/") else a for a in argv]
+
+
+def utc_now():
+    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--suite", action="append", choices=SUITES,
+                        help="suite to run (repeatable; default: all)")
+    parser.add_argument("--only", action="append", metavar="NAME",
+                        help="run only the commands of this name in the suites (repeatable), "
+                             "e.g. --suite scenes --only default")
+    parser.add_argument("--rounds", type=int, help="rounds per command (default 5; --quick: 1)")
+    parser.add_argument("--quick", action="store_true",
+                        help="tiny ray counts and one round, to test the pipeline; writes to "
+                             "--out, or to a new temporary folder")
+    parser.add_argument("--out", help=f"output folder (default {RESULTS_DIR}/)")
+    parser.add_argument("--threads", type=int,
+                        help="pass --threads N to every command (default: all cores)")
+    args = parser.parse_args()
+
+    settings = QUICK if args.quick else FULL
+    rounds = args.rounds if args.rounds is not None else (1 if args.quick else 5)
+    if rounds < 1:
+        parser.error("--rounds must be at least 1")
+    if args.out:
+        out = os.path.abspath(args.out)
+    elif args.quick:
+        out = tempfile.mkdtemp(prefix="rebraid-results-")
+    else:
+        out = repo_path(RESULTS_DIR)
+    if not os.path.exists(repo_path(BINARY)):
+        sys.exit(f"collect.py: {BINARY} is missing: build the project first")
+    suites = args.suite or SUITES
+
+    # The command as recorded: the options that shape the results, paths relative to the
+    # repository root (an output folder outside it is not recorded).
+    collect_argv = ["python3", "bench/collect.py"]
+    if args.quick:
+        collect_argv.append("--quick")
+    collect_argv += ["--rounds", str(rounds)]
+    if args.threads is not None:
+        collect_argv += ["--threads", str(args.threads)]
+    for name in args.only or []:
+        collect_argv += ["--only", name]
+    if args.out and not relative_to_repo(out).startswith(".."):
+        collect_argv += ["--out", relative_to_repo(out)]
+    machine = machine_info()
+    commit = commit_info()
+    print(f"collect.py: {rounds} round(s) of {', '.join(suites)} into {out}", file=sys.stderr)
+    if commit["dirty"]:
+        print("collect.py: the working tree differs from the commit (recorded as dirty)",
+              file=sys.stderr)
+
+    durations = {}
+    tmp = tempfile.mkdtemp(prefix="rebraid-scenes-")
+    try:
+        for suite in suites:
+            jobs = [j for j in jobs_of(suite, settings, args.threads)
+                    if not args.only or j[0] in args.only]
+            if not jobs:
+                continue
+            folder = os.path.join(out, suite)
+            os.makedirs(folder, exist_ok=True)
+            names = {name for name, _, _ in jobs}
+            for old in os.listdir(folder):
+                match = re.fullmatch(r"(.+)\.r\d+\.json", old)
+                if match and match.group(1) in names:
+                    os.remove(os.path.join(folder, old))
+            start = time.monotonic()
+            for _, _, setup in jobs:
+                for argv in setup:
+                    run(substitute(argv, tmp))
+            for round_index in range(1, rounds + 1):
+                for order, (name, argv, setup) in enumerate(jobs):
+                    load = load_average()
+                    date = utc_now()
+                    job_start = time.monotonic()
+                    output = run_json(substitute(argv, tmp))
+                    result = {
+                        "name": name,
+                        "suite": suite,
+                        "command": argv,
+                        "setup": setup,
+                        "order": order,
+                        "collect_command": collect_argv[:2] + ["--suite", suite] + collect_argv[2:],
+                        "commit": commit["commit"],
+                        "dirty": commit["dirty"],
+                        "machine": machine,
+                        "date": date,
+                        "round": round_index,
+                        "rounds": rounds,
+                        "seconds": round(time.monotonic() - job_start, 2),
+                        "load_average_before": load,
+                        "output": output,
+                    }
+                    path = os.path.join(folder, f"{name}.r{round_index}.json")
+                    with open(path, "w") as f:
+                        json.dump(result, f, indent=1)
+                        f.write("\n")
+                    print(f"  {suite}/{name} round {round_index}: {result['seconds']:.1f} s",
+                          file=sys.stderr, flush=True)
+            durations[suite] = time.monotonic() - start
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    for suite, seconds in durations.items():
+        print(f"collect.py: {suite}: {seconds:.0f} s for {rounds} round(s) "
+              f"({seconds / rounds:.0f} s a round)", file=sys.stderr)
+    print(f"collect.py: results in {out}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,534 @@
+#!/usr/bin/env python3
+"""Write bench/RESULTS.md from the raw results that bench/collect.py wrote to bench/results/.
+
+  python3 bench/report.py                          bench/results/ -> bench/RESULTS.md
+  python3 bench/report.py --results DIR --out FILE
+  python3 bench/report.py --plots                  also draw figures beside the output file
+                                                   (needs matplotlib; without it the report is
+                                                   written without figures)
+
+The output depends only on the result files (and the options): the same input gives the same
+bytes. Every figure is a median over the rounds; a ratio of two structures is computed in each
+round (one process, the same rays) and its median over the rounds is shown.
+"""
+import argparse
+import os
+import sys
+
+from results_io import DEFAULT_ACCELS, PAPER, RESULTS_DIR, load_results, median, repo_path
+
+SUITE_ORDER = {"scenes": 0, "generated": 1, "animate": 2}
+# Short column names of the structures; any other variant keeps its full name.
+LABELS = {PAPER: "paper"}
+PROJECT = ["flat", "twolevel", "rebraid", PAPER]
+DASH = "-"
+
+
+# ---------------------------------------------------------------- formatting
+
+def fmt(value, digits=2):
+    return DASH if value is None else f"{value:.{digits}f}"
+
+
+def fmt_ms(value):
+    """Milliseconds with precision by magnitude."""
+    if value is None:
+        return DASH
+    return f"{value:.0f}" if value >= 100 else f"{value:.1f}" if value >= 10 else f"{value:.2f}"
+
+
+def fmt_sig(value):
+    """A positive quantity with about three significant digits."""
+    if value is None:
+        return DASH
+    for limit, digits in ((100, 0), (10, 1), (1, 2)):
+        if value >= limit:
+            return f"{value:.{digits}f}"
+    return f"{value:.3f}"
+
+
+def fmt_int(value):
+    return DASH if value is None else f"{round(value):,}"
+
+
+def fmt_ratio(value):
+    return DASH if value is None else f"{value:.2f}"
+
+
+def table(header, rows, left=1):
+    """A Markdown table; the first `left` columns are aligned left, the others right."""
+    lines = ["| " + " | ".join(header) + " |",
+             "|" + "|".join("---" if i < left else "--:" for i in range(len(header))) + "|"]
+    lines += ["| " + " | ".join(row) + " |" for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def label(accel):
+    return LABELS.get(accel, accel)
+
+
+def code(argv):
+    return " ".join(quote(a) for a in argv)
+
+
+def quote(arg):
+    safe = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./:=,+@%")
+    return arg if arg and set(arg) <= safe else "'" + arg.replace("'", "'\\''") + "'"
+
+
+# ---------------------------------------------------------------- grouping
+
+class Run:
+    """The rounds of one command: its result files, in round order."""
+
+    def __init__(self, results):
+        self.results = sorted(results, key=lambda r: r.get("round", 0))
+        first = self.results[0]
+        self.name, self.suite, self.command = first["name"], first.get("suite", ""), first["command"]
+        self.order = first.get("order", 0)
+
+    def rows(self, key):
+        """Per round, the output rows keyed by `key` ('accel' or 'method')."""
+        return [{row[key]: row for row in r["output"]} for r in self.results]
+
+    def names(self, key):
+        seen = []
+        for rows in self.rows(key):
+            seen += [n for n in rows if n not in seen]
+        return seen
+
+    def value(self, key, name, field):
+        """The median over rounds of row `name`'s `field`."""
+        return median([rows[name].get(field) for rows in self.rows(key) if name in rows])
+
+    def ratio(self, key, a, b, field):
+        """The median over rounds of a's `field` over b's, each round's from its own output."""
+        values = []
+        for rows in self.rows(key):
+            if a in rows and b in rows:
+                x, y = rows[a].get(field), rows[b].get(field)
+                if x is not None and y:
+                    values.append(x / y)
+        return median(values)
+
+    def first(self, key, name, field):
+        for rows in self.rows(key):
+            if name in rows and rows[name].get(field) is not None:
+                return rows[name][field]
+        return None
+
+
+def group_runs(results):
+    runs = {}
+    for r in results:
+        runs.setdefault((r.get("suite", ""), r["name"]), []).append(r)
+    return sorted((Run(v) for v in runs.values()),
+                  key=lambda run: (SUITE_ORDER.get(run.suite, 9), run.suite, run.order, run.name))
+
+
+def ordered_accels(runs):
+    seen = []
+    for run in runs:
+        seen += [a for a in run.names("accel") if a not in seen]
+    known = [a for a in DEFAULT_ACCELS + [PAPER] if a in seen]
+    return known + [a for a in seen if a not in known]
+
+
+# ---------------------------------------------------------------- sections
+
+def section_setup(results, runs):
+    out = ["## Setup\n"]
+    machines = {}
+    for r in results:
+        m = r.get("machine", {})
+        key = tuple(sorted((k, str(v)) for k, v in m.items()))
+        machines.setdefault(key, (m, set()))[1].add(r.get("suite", ""))
+    for m, suites in machines.values():
+        simd = ", ".join(s.upper().replace("_", ".") for s in m.get("simd") or [])
+        where = f" ({', '.join(sorted(suites))})" if len(machines) > 1 else ""
+        out.append(f"- **Machine{where}:** {m.get('cpu') or 'unknown CPU'}, "
+                   f"{m.get('logical_cores', '?')} logical cores"
+                   + (f" ({simd})" if simd else "")
+                   + f", {m.get('memory_gib', '?')} GiB memory, {m.get('kernel', '?')}.")
+        software = []
+        if m.get("embree"):
+            software.append(f"Embree {m['embree']}")
+        if m.get("tbb"):
+            software.append(f"oneTBB (libtbb.so.{m['tbb']})")
+        if m.get("compiler"):
+            software.append(m["compiler"])
+        if m.get("build_type"):
+            flags = f" `{m['cxx_flags']}`" if m.get("cxx_flags") else ""
+            software.append(f"{m['build_type']} build{flags}")
+        if software:
+            out.append(f"- **Software{where}:** " + ", ".join(software) + ".")
+    commits = {}
+    for r in results:
+        commits.setdefault((r.get("commit"), r.get("dirty")), set()).add(r.get("suite", ""))
+    for (commit, dirty), suites in sorted(commits.items(), key=lambda c: str(c[0])):
+        where = f" ({', '.join(sorted(suites))})" if len(commits) > 1 else ""
+        state = " with uncommitted changes in the working tree" if dirty else ""
+        out.append(f"- **Commit{where}:** `{commit or 'unknown'}`{state}.")
+    dates = sorted(r["date"] for r in results if r.get("date"))
+    if dates:
+        span = dates[0] if dates[0] == dates[-1] else f"{dates[0]} to {dates[-1]}"
+        out.append(f"- **Collected:** {span} (UTC).")
+    rounds = sorted({len(run.results) for run in runs})
+    out.append(f"- **Rounds:** {' or '.join(map(str, rounds))} per command, each its own process.")
+    loads = [r["load_average_before"] for r in results if r.get("load_average_before") is not None]
+    if loads:
+        out.append(f"- **Load average** (1 min) before each command: median {median(loads):.2f}, "
+                   f"highest {max(loads):.2f}, on {results[0].get('machine', {}).get('logical_cores', '?')}"
+                   " logical cores.")
+    return "\n".join(out) + "\n"
+
+
+def section_method(runs):
+    threads = sorted({row.get("threads") for run in runs for r in run.results
+                      for row in r["output"] if isinstance(row, dict) and row.get("threads")})
+    thread_text = (" or ".join(f"{t} thread{'s' if t != 1 else ''}" for t in threads)
+                   if threads else "all cores")
+    return f"""## How the numbers are measured
+
+- `rebraid bench` builds every structure of one scene in one process and traces the same rays
+  through each: primary rays of the auto-framed camera (one per pixel of a 16:9 image) and as
+  many diffuse bounce rays from their hit points (cosine-distributed, fixed seed). Mrays/s is
+  closest-hit throughput on {thread_text}: the median of the timed runs after one warm-up.
+- Each round is a separate process on the same rays. Tables show the median over the rounds;
+  a ratio of two structures is computed within each round and the median of those ratios is
+  shown.
+- SAH, node, BRef and work counts are exact and the same in every round. SAH is divided by the
+  same scene box for every structure; Embree's structures report none.
+- Structures: `embree-flat` and `embree-instanced` are Embree's BVHs over all triangles and
+  over instances; `flat` is the project's BVH over all triangles; `twolevel` its BVH over
+  instances (one BRef per instance); `rebraid` the partially re-braided top level with the
+  project's default rules; `paper` is `{PAPER}`, the paper's rules (extent opening,
+  transformed node boxes).
+- A "{DASH}" marks a figure the structure or the command does not report.
+"""
+
+
+def section_commands(runs):
+    out = ["## Commands\n",
+           "Run from the repository root. `TMP` stands for a temporary folder.\n"]
+    suites = []
+    for run in runs:
+        if run.suite not in suites:
+            suites.append(run.suite)
+    for suite in suites:
+        members = [run for run in runs if run.suite == suite]
+        lines = []
+        collect = members[0].results[0].get("collect_command")
+        if collect:
+            lines.append("# " + code(collect))
+        for run in members:
+            for setup in run.results[0].get("setup", []):
+                if code(setup) not in lines:
+                    lines.append(code(setup))
+        for run in members:
+            line = code(run.command)
+            if line not in lines:
+                lines.append(line)
+        per_round = {}
+        for run in members:
+            for r in run.results:
+                if r.get("seconds") is not None:
+                    per_round[r.get("round", 0)] = per_round.get(r.get("round", 0), 0) + r["seconds"]
+        took = (f" one round took {median(per_round.values()) / 60:.1f} min."
+                if per_round else "")
+        out.append(f"Suite `{suite}`:{took}\n\n```sh\n" + "\n".join(lines) + "\n```\n")
+    return "\n".join(out)
+
+
+def bench_runs(runs):
+    return [run for run in runs if run.results[0]["output"]
+            and isinstance(run.results[0]["output"][0], dict) and "accel" in run.results[0]["output"][0]]
+
+
+def animate_runs(runs):
+    return [run for run in runs if run.results[0]["output"]
+            and isinstance(run.results[0]["output"][0], dict) and "method" in run.results[0]["output"][0]]
+
+
+def section_scenes(runs):
+    rows = []
+    for run in runs:
+        accel = run.names("accel")[0]
+        source = {"scenes": "built-in" if run.name == "default" else "shared",
+                  "generated": "generated"}.get(run.suite, run.suite)
+        hits_p, hits_d = run.first("accel", accel, "hits_primary"), run.first("accel", accel, "hits_diffuse")
+        rays_p, rays_d = run.first("accel", accel, "rays_primary"), run.first("accel", accel, "rays_diffuse")
+        rows.append([run.name, source, fmt_int(run.first("accel", accel, "triangles")),
+                     fmt_int(run.first("accel", accel, "instances")),
+                     fmt_int(run.first("accel", accel, "meshes")),
+                     f"{fmt_int(rays_p)} ({fmt_int(hits_p)})", f"{fmt_int(rays_d)} ({fmt_int(hits_d)})"])
+    return ("## Scenes\n\nTriangles over all instances; rays traced per run (rays that hit).\n\n"
+            + table(["scene", "source", "triangles", "instances", "meshes", "primary rays (hit)",
+                     "diffuse rays (hit)"], rows, left=2))
+
+
+def per_scene_table(runs, accels, field, formatter):
+    """Rows: scenes; columns: the structures that report `field` for some scene."""
+    accels = [a for a in accels if any(run.value("accel", a, field) is not None for run in runs)]
+    rows = [[run.name] + [formatter(run.value("accel", a, field)) for a in accels] for run in runs]
+    return table(["scene"] + [label(a) for a in accels], rows)
+
+
+RATIOS = [("flat", "embree-flat"), ("rebraid", "embree-flat"), ("rebraid", "embree-instanced"),
+          ("rebraid", "twolevel"), (PAPER, "twolevel")]
+
+
+def section_table1(runs, accels):
+    out = ["## Table 1: SAH and ray throughput\n",
+           "### SAH (lower is better)\n", per_scene_table(runs, accels, "sah", fmt),
+           "### Primary rays, Mrays/s\n", per_scene_table(runs, accels, "mrays_primary", fmt),
+           "### Diffuse rays, Mrays/s\n", per_scene_table(runs, accels, "mrays_diffuse", fmt)]
+    for field, title in (("mrays_primary", "primary"), ("mrays_diffuse", "diffuse")):
+        rows = [[run.name] + [fmt_ratio(run.ratio("accel", a, b, field)) for a, b in RATIOS]
+                for run in runs]
+        out.append(f"### Speed ratios, {title} rays (above 1: the first is faster)\n")
+        out.append(table(["scene"] + [f"{label(a)} / {label(b)}" for a, b in RATIOS], rows))
+    return "\n".join(out)
+
+
+def section_table1b(runs, accels):
+    project = [a for a in accels if a in PROJECT or a.startswith("rebraid:")]
+    fields = ["nodes_per_diffuse_ray", "triangles_per_diffuse_ray", "object_entries_per_diffuse_ray"]
+    if not any(run.value("accel", a, f) is not None for run in runs for a in project for f in fields):
+        return ""
+    out = ["## Table 1b: work per diffuse ray\n",
+           "Counted in an untimed pass over the diffuse rays (exact). Object entries are top-level\n"
+           "items a ray enters: one ray transform and one object-BVH traversal each. `work` is\n"
+           "nodes + triangles, the two unit costs of the SAH, over `flat`'s.\n"]
+    for field, title in (("nodes_per_diffuse_ray", "Nodes visited"),
+                         ("triangles_per_diffuse_ray", "Triangles tested"),
+                         ("object_entries_per_diffuse_ray", "Object entries")):
+        out.append(f"### {title} per diffuse ray\n")
+        out.append(per_scene_table(runs, project, field, fmt))
+    rows = []
+    for run in runs:
+        def work(accel):
+            n = run.value("accel", accel, "nodes_per_diffuse_ray")
+            t = run.value("accel", accel, "triangles_per_diffuse_ray")
+            return None if n is None or t is None else n + t
+        base = work("flat")
+        rows.append([run.name] + [fmt_ratio(work(a) / base if work(a) is not None and base else None)
+                                  for a in project])
+    out.append("### Work (nodes + triangles) over flat's\n")
+    out.append(table(["scene"] + [label(a) for a in project], rows))
+    return "\n".join(out)
+
+
+def section_table2(runs, accels):
+    tops = [a for a in accels if a in ("twolevel", "rebraid") or a.startswith("rebraid:")]
+    header = ["scene"] + [f"{label(a)} build" for a in accels]
+    header += [f"{label(a)} top" for a in tops]
+    header += [f"{label(a)} top / twolevel top" for a in tops if a != "twolevel"]
+    rows = []
+    for run in runs:
+        row = [run.name] + [fmt_ms(run.value("accel", a, "build_ms")) for a in accels]
+        row += [fmt_ms(run.value("accel", a, "top_build_ms")) for a in tops]
+        row += [fmt_ratio(run.ratio("accel", a, "twolevel", "top_build_ms"))
+                for a in tops if a != "twolevel"]
+        rows.append(row)
+    out = ["## Table 2: build times (ms)\n",
+           "Full build of each structure (for the two-level ones: object BVHs and top level) and,\n"
+           "for the two-level structures, the top level alone.\n", table(header, rows)]
+    rebraids = [a for a in tops if a != "twolevel"]
+    if rebraids:
+        header = ["scene", "instances"]
+        for a in rebraids:
+            header += [f"{label(a)} BRefs", f"{label(a)} budget", f"{label(a)} opened"]
+        rows = []
+        for run in runs:
+            row = [run.name, fmt_int(run.first("accel", rebraids[0], "instances"))]
+            for a in rebraids:
+                row += [fmt_int(run.value("accel", a, k)) for k in ("brefs", "budget", "opened")]
+            rows.append(row)
+        out.append("### Re-braided top levels\n")
+        out.append("BRefs in the top level, the budget of extra BRefs, and BRefs opened.\n")
+        out.append(table(header, rows))
+    return "\n".join(out)
+
+
+def section_memory(runs, accels):
+    if not any(run.value("accel", a, "memory_bytes") is not None for run in runs for a in accels):
+        return ""
+    rows = [[run.name] + [fmt_sig(None if (v := run.value("accel", a, "memory_bytes")) is None
+                                  else v / 2 ** 20) for a in accels] for run in runs]
+    return ("## Memory (MiB)\n\nBytes each structure holds, as it reports them (`memory_bytes`).\n\n"
+            + table(["scene"] + [label(a) for a in accels], rows))
+
+
+def option(argv, name, default):
+    return argv[argv.index(name) + 1] if name in argv[:-1] else default
+
+
+def describe_animate(run):
+    argv = run.command
+    static = option(argv, "--static", None)
+    dynamic = option(argv, "--dynamic", None)
+    static_text = f"`{os.path.basename(static)}`" if static else "the default scene"
+    dynamic_text = f"`{os.path.basename(dynamic)}`" if dynamic else "the built-in twisting object"
+    copies = option(argv, "--copies", "4")
+    frames = option(argv, "--frames", "30")
+    width, height = option(argv, "--width", "640"), option(argv, "--height", "360")
+    return (f"{copies} copies of {dynamic_text} in {static_text}; {frames} frames, each "
+            f"{width}x{height} primary rays and one diffuse bounce")
+
+
+def section_frames(runs):
+    if not runs:
+        return ""
+    out = ["## Frames: animated objects in a static scene\n",
+           "`rebraid animate`: per frame, pose the animated copies, update each method's structure\n"
+           "and render. Per method (structure + object-BVH update strategy): the mean frame time\n"
+           "and its parts, the worst frame, the SAH after the last frame and the initial build.\n"
+           "Each figure is the median over the rounds of the run's value.\n"]
+    fields = [("mean_frame_ms", "frame ms"), ("max_frame_ms", "worst frame ms"),
+              ("mean_animation_ms", "animation ms"), ("mean_update_ms", "update ms"),
+              ("mean_top_ms", "top ms"), ("mean_render_ms", "render ms")]
+    for run in runs:
+        out.append(f"### {run.name}\n")
+        out.append(describe_animate(run) + ".\n")
+        rows = []
+        for method in run.names("method"):
+            rows.append([method] + [fmt_ms(run.value("method", method, f)) for f, _ in fields]
+                        + [fmt(run.value("method", method, "final_sah")),
+                           fmt_ms(run.value("method", method, "build_ms"))])
+        out.append(table(["method"] + [t for _, t in fields] + ["final SAH", "build ms"], rows))
+    return "\n".join(out)
+
+
+# ---------------------------------------------------------------- plots
+
+def draw_plots(out_file, scene_runs, frame_runs):
+    """Figures beside `out_file`; returns their Markdown links ([] without matplotlib)."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("report.py: matplotlib is missing: no figures", file=sys.stderr)
+        return {}
+    stem = os.path.splitext(os.path.basename(out_file))[0]
+    folder = os.path.dirname(os.path.abspath(out_file))
+    links = {}
+    plt.rcParams["svg.hashsalt"] = "rebraid"
+    if scene_runs:
+        pairs = [("flat", "embree-flat"), ("twolevel", "embree-flat"), (PAPER, "embree-flat"),
+                 ("rebraid", "embree-flat")]
+        figure, axis = plt.subplots(figsize=(11, 4.5))
+        width = 0.8 / len(pairs)
+        for i, (a, b) in enumerate(pairs):
+            values = [run.ratio("accel", a, b, "mrays_diffuse") or 0 for run in scene_runs]
+            axis.bar([x + (i - (len(pairs) - 1) / 2) * width for x in range(len(scene_runs))],
+                     values, width, label=label(a))
+        axis.axhline(1.0, color="black", linewidth=0.8)
+        axis.set_xticks(range(len(scene_runs)), [run.name for run in scene_runs], rotation=30,
+                        ha="right")
+        axis.set_ylabel("diffuse Mrays/s / embree-flat's")
+        axis.set_title("Diffuse-ray throughput relative to Embree's flat BVH (median of rounds)")
+        axis.grid(axis="y", alpha=0.3)
+        axis.legend(fontsize="small")
+        figure.tight_layout()
+        name = f"{stem}-diffuse.png"
+        figure.savefig(os.path.join(folder, name), dpi=100, metadata={"Software": None})
+        plt.close(figure)
+        links["scenes"] = f"![Diffuse-ray throughput relative to embree-flat]({name})\n"
+    for run in frame_runs:
+        methods = run.names("method")
+        parts = [("mean_animation_ms", "animation"), ("mean_update_ms", "update"),
+                 ("mean_top_ms", "top"), ("mean_render_ms", "render")]
+        figure, axis = plt.subplots(figsize=(10, 0.35 * len(methods) + 1.5))
+        left = [0.0] * len(methods)
+        for field, title in parts:
+            values = [run.value("method", m, field) or 0 for m in methods]
+            axis.barh(range(len(methods)), values, left=left, label=title)
+            left = [l + v for l, v in zip(left, values)]
+        axis.set_yticks(range(len(methods)), methods)
+        axis.invert_yaxis()
+        axis.set_xscale("log") if max(left) > 20 * sorted(left)[len(left) // 2] else None
+        axis.set_xlabel("mean frame ms (median of rounds)")
+        axis.set_title(f"Frame time: {run.name}")
+        axis.grid(axis="x", alpha=0.3)
+        axis.legend(fontsize="small")
+        figure.tight_layout()
+        name = f"{stem}-frames-{run.name}.png"
+        figure.savefig(os.path.join(folder, name), dpi=100, metadata={"Software": None})
+        plt.close(figure)
+        links[run.name] = f"![Frame time of {run.name}]({name})\n"
+    return links
+
+
+# ---------------------------------------------------------------- main
+
+def report(results, generated_by, results_dir, plots_out=None):
+    runs = group_runs(results)
+    scene_runs = bench_runs(runs)
+    frame_runs = animate_runs(runs)
+    accels = ordered_accels(scene_runs)
+    links = draw_plots(plots_out, scene_runs, frame_runs) if plots_out else {}
+    parts = [
+        "# Benchmark results\n",
+        f"This file is generated by `{generated_by}` from the raw results in `{results_dir}/`\n"
+        "(written by `bench/collect.py`). Do not edit it by hand: collect new results and\n"
+        "regenerate it (see \"How to regenerate\" at the end).\n",
+        section_setup(results, runs),
+        section_method(runs),
+        section_commands(runs),
+    ]
+    if scene_runs:
+        parts += [section_scenes(scene_runs), section_table1(scene_runs, accels)]
+        if "scenes" in links:
+            parts.append(links["scenes"])
+        parts += [section_table1b(scene_runs, accels), section_table2(scene_runs, accels),
+                  section_memory(scene_runs, accels)]
+    frames = section_frames(frame_runs)
+    if frames and links:
+        for run in frame_runs:
+            if run.name in links:
+                marker = f"### {run.name}\n"
+                frames = frames.replace(marker, marker + "\n" + links[run.name], 1)
+    parts.append(frames)
+    parts.append("## How to regenerate\n\n"
+                 "From the repository root, after building `build/` (Release), on an otherwise idle\n"
+                 "machine:\n\n"
+                 "```sh\n"
+                 "python3 bench/collect.py    # every suite, 5 rounds, into bench/results/\n"
+                 "python3 bench/report.py     # bench/results/ -> bench/RESULTS.md\n"
+                 "```\n\n"
+                 "`python3 bench/collect.py --help` lists the suites and options; `--quick --out DIR`\n"
+                 "checks the pipeline in a minute or two without touching bench/results/.\n"
+                 "`python3 bench/report.py --plots` also draws the figures (needs matplotlib).\n")
+    return "\n".join(p.rstrip("\n") + "\n" for p in parts if p)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--results", default=RESULTS_DIR,
+                        help=f"folder of result files (default {RESULTS_DIR}/)")
+    parser.add_argument("--out", default="bench/RESULTS.md", help="report to write")
+    parser.add_argument("--plots", action="store_true",
+                        help="also write figures (PNG) beside the report (needs matplotlib)")
+    args = parser.parse_args()
+    results = load_results(repo_path(args.results))
+    if not results:
+        sys.exit(f"report.py: no result files under {args.results}")
+    generated_by = "python3 bench/report.py"
+    if args.results != RESULTS_DIR:
+        generated_by += f" --results {args.results}"
+    if args.out != "bench/RESULTS.md":
+        generated_by += f" --out {args.out}"
+    if args.plots:
+        generated_by += " --plots"
+    out_file = repo_path(args.out)
+    text = report(results, generated_by, args.results.rstrip("/"), out_file if args.plots else None)
+    with open(out_file, "w", newline="\n") as f:
+        f.write(text)
+    print(f"report.py: wrote {args.out} from {len(results)} result files", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,254 @@
+#include "embree_glue/dropin/embree_accel.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "embree_glue/dropin/embree_interposer_registry.h"
+#include "embree_glue/reference/embree_geometry.h"
+#include "rebraid/core/build_timer.h"
+#include "rebraid/core/error.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/rebraiding/rebraid_builder.h"
+
+namespace rebraid {
+namespace {
+
+ObjectBvhBuilder make_object_builder(const EmbreeAccelSettings& settings) {
+    if (settings.object_builder == EmbreeAccelObjectBuilder::embree)
+        return glue::embree_object_bvh_builder(settings.embree_builder);
+    return own_object_bvh_builder(settings.own_builder);
+}
+
+bool is_ray_mask_supported(RTCScene scene) {
+    // rtcGetSceneDevice adds a reference to the device.
+    const RTCDevice device = rtcGetSceneDevice(scene);
+    if (device == nullptr) return false;
+    const bool is_supported =
+        rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+    rtcReleaseDevice(device);
+    return is_supported;
+}
+
+/// Same meshes (geometries, triangles, vertex counts) and same instances (geometries, ids,
+/// meshes): only vertex positions and transforms may differ.
+bool has_same_structure(const glue::ConvertedEmbreeScene& a, const glue::ConvertedEmbreeScene& b) {
+    if (a.mesh_geometries != b.mesh_geometries || a.instance_ids != b.instance_ids ||
+        a.instance_geometries != b.instance_geometries || a.triangle_scenes != b.triangle_scenes)
+        return false;
+    for (std::size_t m = 0; m < a.scene.meshes.size(); ++m) {
+        const Mesh& mesh_a = a.scene.meshes[m];
+        const Mesh& mesh_b = b.scene.meshes[m];
+        if (mesh_a.positions.size() != mesh_b.positions.size() ||
+            mesh_a.triangles != mesh_b.triangles)
+            return false;
+    }
+    for (std::size_t i = 0; i < a.scene.instances.size(); ++i)
+        if (a.scene.instances[i].mesh_id != b.scene.instances[i].mesh_id) return false;
+    return true;
+}
+
+/// The re-braided top over `scene` with the given object BVHs, as build_rebraid_accel makes it.
+std::unique_ptr<InstancedAccel> build_top(const Scene& scene, std::vector<ObjectBvh> object_bvhs,
+                                          const RebraidSettings& settings,
+                                          const BuildTimer& timer) {
+    RebraidBuild build = build_rebraid(scene, object_bvhs, settings);
+    AccelStats info;
+    info.build_ms = timer.elapsed_ms();
+    info.top_build_ms = build.top.build_ms;
+    info.brefs = build.brefs;
+    info.budget = build.budget;
+    info.opened = build.opened;
+    return std::make_unique<InstancedAccel>(scene, std::move(object_bvhs), std::move(build.top),
+                                            info);
+}
+
+/// Embree's world-to-object map of each instance (index = InstanceId).
+std::vector<AffineTransform> embree_world_to_object_maps(const Scene& scene) {
+    std::vector<AffineTransform> maps;
+    maps.reserve(scene.instances.size());
+    for (const Instance& instance : scene.instances)
+        maps.push_back(glue::embree_world_to_object(instance.object_to_world));
+    return maps;
+}
+
+/// index = MeshId, then PrimId: where the triangle sits in its object BVH's leaf order
+/// (kInvalidId for a triangle the BVH does not hold).
+std::vector<std::vector<std::uint32_t>> leaf_positions_of(const InstancedAccel& accel) {
+    std::vector<std::vector<std::uint32_t>> positions(accel.object_bvhs().size());
+    for (std::size_t m = 0; m < positions.size(); ++m) {
+        const std::vector<PrimId>& prim_ids = accel.object_bvhs()[m].prim_ids;
+        const PrimId largest =
+            prim_ids.empty() ? 0 : *std::max_element(prim_ids.begin(), prim_ids.end());
+        positions[m].assign(prim_ids.empty() ? 0 : std::size_t(largest) + 1, kInvalidId);
+        for (std::size_t i = 0; i < prim_ids.size(); ++i)
+            positions[m][prim_ids[i]] = std::uint32_t(i);
+    }
+    return positions;
+}
+
+}  // namespace
+
+void EmbreeAccelSettings::validate() const {
+    if (object_builder != EmbreeAccelObjectBuilder::own &&
+        object_builder != EmbreeAccelObjectBuilder::embree)
+        throw Error("EmbreeAccelSettings: object_builder " + std::to_string(int(object_builder)) +
+                    " is neither own nor embree");
+    own_builder.validate();
+    embree_builder.validate();
+    rebraid.validate();
+    object_update.validate();
+}
+
+EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
+    : scene_(scene), settings_(settings) {
+    settings_.validate();
+    if (scene_ == nullptr) throw Error("EmbreeAccel: the scene is null");
+    is_ray_mask_supported_ = is_ray_mask_supported(scene_);
+    arithmetic_ = glue::detect_embree_kernel_arithmetic();
+    converted_ = convert_now();
+    embree_world_to_object_ = embree_world_to_object_maps(converted_.scene);
+    object_builder_ = make_object_builder(settings_);
+    accel_ = std::make_unique<InstancedAccel>(
+        build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
+    leaf_positions_ = leaf_positions_of(*accel_);
+    bounds_ = converted_.scene.bounds();
+    rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
+}
+
+EmbreeAccel::~EmbreeAccel() {
+    rtcReleaseScene(scene_);
+}
+
+glue::ConvertedEmbreeScene EmbreeAccel::convert_now() const {
+    if (glue::has_lost_records())
+        throw Error(
+            "EmbreeAccel: the drop-in's registry lost a record (out of memory while "
+            "recording an Embree call); it cannot describe the scene");
+    const std::optional<glue::RegisteredSceneSnapshot> snapshot =
+        glue::snapshot_registered_scene(scene_);
+    if (!snapshot) {
+        if (!glue::is_interposer_active())
+            throw Error(
+                "EmbreeAccel: no Embree call of this program went through the drop-in's "
+                "interposer: link rebraid::embree_dropin before libembree3");
+        throw Error(
+            "EmbreeAccel: the drop-in's registry does not know the scene (it was "
+            "released, or created by code that calls Embree without the interposer)");
+    }
+    return glue::convert_embree_scene(*snapshot, is_ray_mask_supported_);
+}
+
+void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
+    const RTCRay& in = rayhit.ray;
+    // Embree's inactive rays (tnear > tfar, or NaN bounds) and rays whose mask no geometry
+    // shares are left untouched.
+    if (!(in.tnear <= in.tfar)) return;
+    if (is_ray_mask_supported_ && in.mask == 0) return;
+    const Ray ray = glue::from_embree_ray(in);
+    const Hit hit = accel_->intersect(ray);
+    if (!hit.is_hit()) return;
+    const MeshId mesh_id = converted_.scene.instances[hit.instance_id].mesh_id;
+    const glue::EmbreeHitIds& ids = converted_.instance_ids[hit.instance_id];
+    // The corners from the object BVH's leaf copy, which the traversal has just read (the
+    // mesh's index and vertex arrays would cost two dependent cache misses on large scenes).
+    std::array<Vec3f, 3> corners;
+    const std::vector<std::uint32_t>& positions = leaf_positions_[mesh_id];
+    const std::uint32_t position =
+        hit.prim_id < positions.size() ? positions[hit.prim_id] : kInvalidId;
+    if (position != kInvalidId) {
+        const TriangleVerts& triangle = accel_->object_bvhs()[mesh_id].triangles[position];
+        corners = {triangle.v0, triangle.v1, triangle.v2};
+    } else {
+        corners = converted_.scene.meshes[mesh_id].corners(hit.prim_id);
+    }
+    // Our traversal found the triangle and t; the reported attributes are computed again the
+    // way Embree computes them (its world-to-object map, its kernel's rounding), so that they
+    // agree with rtcIntersect1 to the last bit where Embree finds the same triangle.
+    const bool is_instanced = ids.inst_id != RTC_INVALID_GEOMETRY_ID;
+    const std::optional<glue::EmbreeHitAttributes> embree_hit = glue::embree_hit_attributes(
+        ray, is_instanced ? &embree_world_to_object_[hit.instance_id] : nullptr, corners,
+        arithmetic_);
+    float t = hit.t, u = hit.u, v = hit.v;
+    Vec3f normal;
+    if (embree_hit) {
+        normal = embree_hit->geometry_normal;
+        u = embree_hit->u;
+        v = embree_hit->v;
+        // Embree's t when it lies in the ray's interval (it does but for rounding at the
+        // interval's ends), so that t, u and v describe the same point.
+        if (embree_hit->t >= in.tnear && embree_hit->t <= in.tfar) t = embree_hit->t;
+    } else {
+        // Parallel in Embree's rounding (a grazing hit Embree would not report): our answer.
+        normal = cross(corners[2] - corners[0], corners[0] - corners[1]);
+    }
+    rayhit.ray.tfar = t;
+    rayhit.hit.Ng_x = normal.x;
+    rayhit.hit.Ng_y = normal.y;
+    rayhit.hit.Ng_z = normal.z;
+    rayhit.hit.u = u;
+    rayhit.hit.v = v;
+    rayhit.hit.primID = hit.prim_id;
+    rayhit.hit.geomID = ids.geom_id;
+    rayhit.hit.instID[0] = ids.inst_id;
+}
+
+void EmbreeAccel::occluded1(RTCRay& in) const noexcept {
+    if (!(in.tnear <= in.tfar)) return;
+    if (is_ray_mask_supported_ && in.mask == 0) return;
+    const Ray ray = glue::from_embree_ray(in);
+    if (accel_->occluded(ray)) in.tfar = -std::numeric_limits<float>::infinity();
+}
+
+EmbreeUpdateReport EmbreeAccel::update() {
+    const BuildTimer timer;
+    EmbreeUpdateReport report;
+    glue::ConvertedEmbreeScene next = convert_now();
+    std::unique_ptr<InstancedAccel> next_accel;
+    if (!has_same_structure(converted_, next)) {
+        report.is_full_rebuild = true;
+        report.meshes_rebuilt = std::uint32_t(next.scene.meshes.size());
+        next_accel = std::make_unique<InstancedAccel>(
+            build_rebraid_accel(next.scene, object_builder_, settings_.rebraid));
+        updaters_.clear();
+    } else {
+        next.scene.validate();
+        std::vector<MeshId> changed;
+        for (std::size_t m = 0; m < next.scene.meshes.size(); ++m)
+            if (next.scene.meshes[m].positions != converted_.scene.meshes[m].positions)
+                changed.push_back(MeshId(m));
+        // Unchanged object BVHs are copied: InstancedAccel owns its BVHs, and the current
+        // structure must stay intact until the new one is complete.
+        std::vector<ObjectBvh> object_bvhs = accel_->object_bvhs();
+        updaters_.resize(next.scene.meshes.size());
+        for (MeshId m : changed)
+            if (!updaters_[m])
+                updaters_[m] = std::make_unique<ObjectBvhUpdater>(settings_.object_update);
+        std::vector<UpdateStrategy> applied(changed.size());
+        tbb::parallel_for(std::size_t(0), changed.size(), [&](std::size_t i) {
+            const MeshId m = changed[i];
+            applied[i] = updaters_[m]->update(next.scene.meshes[m], object_bvhs[m]).applied;
+        });
+        for (UpdateStrategy strategy : applied)
+            ++(strategy == UpdateStrategy::rebuild ? report.meshes_rebuilt : report.meshes_refit);
+        report.meshes_unchanged = std::uint32_t(next.scene.meshes.size() - changed.size());
+        next_accel = build_top(next.scene, std::move(object_bvhs), settings_.rebraid, timer);
+    }
+    std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
+    std::vector<std::vector<std::uint32_t>> leaf_positions = leaf_positions_of(*next_accel);
+    bounds_ = next.scene.bounds();
+    converted_ = std::move(next);
+    accel_ = std::move(next_accel);
+    embree_world_to_object_ = std::move(world_to_object);
+    leaf_positions_ = std::move(leaf_positions);
+    report.update_ms = timer.elapsed_ms();
+    return report;
+}
+
+}  // namespace rebraid

@@ -1,0 +1,22 @@
+#pragma once
+
+// The drop-in's interposer (target rebraid::embree_dropin).
+//
+// embree_interposer.cpp defines, with C linkage and Embree's exact signatures, the Embree 3
+// functions that create and change scenes, geometries and buffers (listed in docs/embree.md,
+// "Using rebraid from an Embree application"). An executable that links the drop-in's static
+// library before libembree3 gets these definitions for its own rtc* calls; each one looks the
+// real function up once with dlsym(RTLD_NEXT, name), forwards the call with its arguments
+// unchanged, returns the real result, and then records the call's effect in the registry
+// (embree_interposer_registry.h). Embree's errors reach the application as before: the
+// interposer never reads or clears the device error.
+//
+// Ray queries (rtcIntersect*, rtcOccluded*) are not interposed: tracing costs nothing extra.
+
+extern "C" {
+/// Defined in the interposer's object. The drop-in target passes
+/// `-Wl,--undefined=rebraid_embree_interposer_anchor` to the linker, which pulls the
+/// interposer out of the static library before any shared library is searched, so its
+/// definitions win even when an application lists libembree3 first.
+extern int rebraid_embree_interposer_anchor;
+}

@@ -1,0 +1,161 @@
+#include "embree_glue/reference/embree_hit_attributes.h"
+
+#include <cmath>
+
+#if defined(__x86_64__) || defined(_M_X64) || defined(__i386__)
+#include <immintrin.h>
+#define REBRAID_HAS_SSE_RCP 1
+#endif
+
+// Every product and sum below must round exactly as written: the compiler may not fuse a
+// multiply and an add on its own (this file is built with -mfma, and GCC contracts by default).
+#if defined(__clang__)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
+namespace rebraid::glue {
+namespace {
+
+/// Embree's multiply-adds in the AVX2 kernels: one rounding each.
+struct FusedOps {
+    static float madd(float a, float b, float c) { return std::fma(a, b, c); }    // a * b + c
+    static float msub(float a, float b, float c) { return std::fma(a, b, -c); }   // a * b - c
+    static float nmadd(float a, float b, float c) { return std::fma(-a, b, c); }  // c - a * b
+};
+
+/// Embree's multiply-adds in the SSE and AVX kernels: the product rounds, then the sum.
+struct SeparateOps {
+    static float madd(float a, float b, float c) { return a * b + c; }
+    static float msub(float a, float b, float c) { return a * b - c; }
+    static float nmadd(float a, float b, float c) { return c - a * b; }
+};
+
+template <typename Ops>
+Vec3f kernel_cross(Vec3f a, Vec3f b) {
+    return {Ops::msub(a.y, b.z, a.z * b.y), Ops::msub(a.z, b.x, a.x * b.z),
+            Ops::msub(a.x, b.y, a.y * b.x)};
+}
+
+template <typename Ops>
+float kernel_dot(Vec3f a, Vec3f b) {
+    return Ops::madd(a.x, b.x, Ops::madd(a.y, b.y, a.z * b.z));
+}
+
+/// 1 / x as Embree's kernels compute it: the hardware estimate (12 bits) refined by one
+/// Newton step. The estimate's table is the CPU's own, so on the same machine the result is
+/// bit for bit Embree's.
+template <typename Ops>
+float kernel_reciprocal(float x) {
+#if defined(REBRAID_HAS_SSE_RCP)
+    const float estimate = _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(x)));
+    return Ops::madd(estimate, Ops::nmadd(x, estimate, 1.0f), estimate);
+#else
+    return 1.0f / x;
+#endif
+}
+
+template <typename Ops>
+Vec3f kernel_transform_point(const AffineTransform& m, Vec3f p) {
+    Vec3f out;
+    for (int axis = 0; axis < 3; ++axis)
+        out[axis] = Ops::madd(
+            p.x, m.col_x[axis],
+            Ops::madd(p.y, m.col_y[axis], Ops::madd(p.z, m.col_z[axis], m.translation[axis])));
+    return out;
+}
+
+template <typename Ops>
+Vec3f kernel_transform_vector(const AffineTransform& m, Vec3f d) {
+    Vec3f out;
+    for (int axis = 0; axis < 3; ++axis)
+        out[axis] =
+            Ops::madd(d.x, m.col_x[axis], Ops::madd(d.y, m.col_y[axis], d.z * m.col_z[axis]));
+    return out;
+}
+
+template <typename Ops>
+std::optional<EmbreeHitAttributes> hit_attributes(const Ray& world_ray,
+                                                  const AffineTransform* world_to_object,
+                                                  const std::array<Vec3f, 3>& corners) {
+    Vec3f org = world_ray.org, dir = world_ray.dir;
+    if (world_to_object != nullptr) {
+        org = kernel_transform_point<Ops>(*world_to_object, org);
+        dir = kernel_transform_vector<Ops>(*world_to_object, dir);
+    }
+    const Vec3f& v0 = corners[0];
+    const Vec3f edge1 = v0 - corners[1];
+    const Vec3f edge2 = corners[2] - v0;
+    const Vec3f normal = kernel_cross<Ops>(edge2, edge1);
+    const Vec3f to_v0 = v0 - org;
+    const Vec3f r = kernel_cross<Ops>(to_v0, dir);
+    const float den = kernel_dot<Ops>(normal, dir);
+    if (!(den != 0.0f)) return std::nullopt;
+    // Embree flips the sign bits of U, V and T when den is negative.
+    const bool is_negative = std::signbit(den);
+    auto with_den_sign = [is_negative](float x) { return is_negative ? -x : x; };
+    const float scaled_u = with_den_sign(kernel_dot<Ops>(r, edge2));
+    const float scaled_v = with_den_sign(kernel_dot<Ops>(r, edge1));
+    const float scaled_t = with_den_sign(kernel_dot<Ops>(normal, to_v0));
+    const float reciprocal = kernel_reciprocal<Ops>(std::fabs(den));
+    EmbreeHitAttributes hit;
+    hit.t = scaled_t * reciprocal;
+    hit.u = scaled_u * reciprocal;
+    hit.v = scaled_v * reciprocal;
+    hit.geometry_normal = normal;
+    if (!std::isfinite(hit.t) || !std::isfinite(hit.u) || !std::isfinite(hit.v))
+        return std::nullopt;
+    // Our traversal's watertight test may accept a ray a rounding error outside this test's
+    // edges; keep Embree's guarantee u, v >= 0 (the comparison keeps a -0 as Embree gives it).
+    if (hit.u < 0.0f) hit.u = 0.0f;
+    if (hit.v < 0.0f) hit.v = 0.0f;
+    return hit;
+}
+
+}  // namespace
+
+EmbreeKernelArithmetic detect_embree_kernel_arithmetic() {
+#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+        return EmbreeKernelArithmetic::fused;
+#endif
+    return EmbreeKernelArithmetic::separate;
+}
+
+AffineTransform embree_world_to_object(const AffineTransform& object_to_world) {
+    // Embree inverts at commit in code built for the base instruction set: no fused
+    // operations, whatever the kernels use. Measured bit for bit (dropin_results.md).
+    auto plain_cross = [](Vec3f a, Vec3f b) -> Vec3f {
+        return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+    };
+    const AffineTransform& m = object_to_world;
+    const Vec3f adjugate_row_x = plain_cross(m.col_y, m.col_z);
+    const Vec3f adjugate_row_y = plain_cross(m.col_z, m.col_x);
+    const Vec3f adjugate_row_z = plain_cross(m.col_x, m.col_y);
+    const float det = (m.col_x.x * adjugate_row_x.x + m.col_x.y * adjugate_row_x.y) +
+                      m.col_x.z * adjugate_row_x.z;
+    AffineTransform inverse;
+    // Column j of the inverse holds component j of the adjugate's rows, each divided by det.
+    for (int j = 0; j < 3; ++j) {
+        const Vec3f column{adjugate_row_x[j] / det, adjugate_row_y[j] / det,
+                           adjugate_row_z[j] / det};
+        (j == 0 ? inverse.col_x : j == 1 ? inverse.col_y : inverse.col_z) = column;
+    }
+    const Vec3f& p = m.translation;
+    for (int axis = 0; axis < 3; ++axis)
+        inverse.translation[axis] =
+            -(inverse.col_x[axis] * p.x + (inverse.col_y[axis] * p.y + inverse.col_z[axis] * p.z));
+    return inverse;
+}
+
+std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
+                                                         const AffineTransform* world_to_object,
+                                                         const std::array<Vec3f, 3>& corners,
+                                                         EmbreeKernelArithmetic arithmetic) {
+    if (arithmetic == EmbreeKernelArithmetic::fused)
+        return hit_attributes<FusedOps>(world_ray, world_to_object, corners);
+    return hit_attributes<SeparateOps>(world_ray, world_to_object, corners);
+}
+
+}  // namespace rebraid::glue

@@ -1,0 +1,49 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "rebraid/bvh/wide_node.h"
+
+namespace rebraid {
+
+/// Parameters of the binned-SAH wide-BVH builder (object BVHs, the flat BVH and the top
+/// levels). Defaults are the values the benchmarks in bench/RESULTS.md use.
+struct BuildSettings {
+    /// SAH bins per axis; more bins find better splits at a higher build cost.
+    std::uint32_t bin_count = 32;
+    /// Leaves hold at most this many primitives (1..16); larger leaves build faster and
+    /// trace slower.
+    std::uint32_t max_leaf_size = 4;
+    /// SAH cost of visiting a node, relative to `intersection_cost`.
+    float traversal_cost = 1.0f;
+    /// SAH cost of one primitive test.
+    float intersection_cost = 1.0f;
+    /// Ranges with fewer primitives are binned and partitioned serially, larger ones in
+    /// parallel blocks. The prim order within the tree (and, through ties and index splits,
+    /// rarely its shape) depends on this value; nothing depends on the thread count.
+    std::size_t parallel_threshold = 8192;
+    /// Subtrees of at least this many primitives are built as their own TBB task; smaller
+    /// ones by their parent's task. Lower than `parallel_threshold` because a task costs far
+    /// less than a parallel loop, and many mid-sized subtrees keep every thread busy. Node
+    /// numbering depends on this value, the tree's shape does not; neither depends on the
+    /// thread count.
+    std::size_t task_threshold = 1024;
+    /// Ranges of fewer than bin_count * prims_per_bin primitives get one bin per this many
+    /// primitives (at least 4 bins): small ranges spend most of their split search clearing
+    /// and sweeping bins. 2 builds the shared scenes about 6% faster than 1 for an SAH
+    /// within 0.02%; 4 costs up to 0.8% SAH.
+    std::uint32_t prims_per_bin = 2;
+    /// Fill wide nodes by also splitting children the binary SAH test would keep as leaves
+    /// (any child of more than one prim, largest first).
+    bool fill_nodes = true;
+    /// Children per node, 2..kBvhWidth. Nodes keep kBvhWidth slots and the traversal tests
+    /// all of them at once, so fewer children only make the tree deeper: a setting for
+    /// measuring what the 8-wide layout buys (bench/RESULTS.md, "Node width").
+    std::uint32_t max_children = kBvhWidth;
+
+    /// Throws rebraid::Error naming the field and value when a setting is out of range.
+    void validate() const;
+};
+
+}  // namespace rebraid

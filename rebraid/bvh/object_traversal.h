@@ -1,0 +1,149 @@
+#pragma once
+
+#include <bit>
+#include <cstdint>
+
+#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/traversal.h"
+#include "rebraid/bvh/triangle_group.h"
+#include "rebraid/core/simd_config.h"
+
+namespace rebraid {
+inline namespace REBRAID_SIMD_NAMESPACE {
+
+/// A hit-data prefetcher that does nothing (intersect_object_bvh_leaf_order's default).
+struct NoHitDataPrefetch {
+    void operator()(std::uint32_t) const {}
+};
+
+/// The triangles of several leaves (leaf-order ranges of one BVH) gathered into lanes of
+/// group tests, 8 at a time: sibling leaves of 1-2 triangles share one SIMD test.
+class LeafTriangleLanes {
+public:
+    explicit LeafTriangleLanes(const TriangleVerts* triangles) : triangles_(triangles) {}
+
+    /// Adds the leaf's triangles; `on_full()` is called (to test and clear the lanes)
+    /// whenever all lanes are taken and more triangles remain.
+    template <class OnFull>
+    void add(NodeRef leaf, OnFull&& on_full) {
+        const TriangleVerts* first = triangles_ + leaf.first_prim();
+        const std::uint32_t count = leaf.prim_count();
+        if (count_ + count <= kTriangleGroupSize) {  // the common case: the leaf fits
+            for (std::uint32_t i = 0; i < count; ++i) lanes_[count_ + i] = first + i;
+            count_ += count;
+            return;
+        }
+        for (std::uint32_t i = 0; i < count; ++i) {
+            if (count_ == kTriangleGroupSize) on_full();
+            lanes_[count_++] = first + i;
+        }
+    }
+    /// Adds the triangles of the leaves bit i of `slots` selects in `refs` (counting them in
+    /// `counters`, when given), calling `test()` whenever the lanes fill and once at the end
+    /// for the rest; stops adding leaves once `is_done()` (any-hit queries: a hit was found).
+    /// Both object-BVH queries visit sibling leaves this way (LeafVisits::with_siblings).
+    template <class Test, class IsDone>
+    void add_leaves_and_test(const NodeRef* refs, unsigned slots, TraversalCounters* counters,
+                             Test&& test, IsDone&& is_done) {
+        do {
+            const NodeRef leaf = refs[std::countr_zero(slots)];
+            slots &= slots - 1;
+            if (counters) counters->triangles_tested += leaf.prim_count();
+            add(leaf, test);
+        } while (slots && !is_done());
+        test();
+    }
+    std::uint32_t count() const { return count_; }
+    const TriangleVerts* const* lanes() const { return lanes_; }
+    /// Leaf-order position of the triangle in `lane`.
+    std::uint32_t position(std::uint32_t lane) const {
+        return std::uint32_t(lanes_[lane] - triangles_);
+    }
+    void clear() { count_ = 0; }
+
+private:
+    const TriangleVerts* triangles_;
+    const TriangleVerts* lanes_[kTriangleGroupSize];  // left uninitialised: filled as used
+    std::uint32_t count_ = 0;
+};
+
+/// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
+/// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and hit.prim_id to the hit's
+/// position in leaf order (index into bvh.prim_ids and bvh.triangles), and returns true;
+/// leaves hit.instance_id to the caller.
+/// `prefetch_hit_data(position)` is called with the leaf-order position of every closer hit
+/// as it is found: the caller prefetches what it will look up for the final hit (ids in
+/// leaf order), so that the lookup's cache miss overlaps the rest of the traversal. (Asking
+/// for every visited leaf's ids instead cost more than the misses it hid.)
+template <class HitDataPrefetch = NoHitDataPrefetch>
+bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray,
+                                     Hit& hit, TraversalCounters* counters,
+                                     HitDataPrefetch&& prefetch_hit_data = {}) {
+    const TriangleGroupRay group_ray(ray.org, ray.dir);
+    bool found = false;
+    LeafTriangleLanes lanes(bvh.triangles.data());
+    const auto test_lanes = [&] {
+        TriangleGroupHit group_hit;
+        if (intersect_triangle_lanes(lanes.lanes(), lanes.count(), group_ray, ray.tnear, ray.tfar,
+                                     group_hit)) {
+            ray.tfar = group_hit.t;
+            hit.t = group_hit.t;
+            hit.u = group_hit.u;
+            hit.v = group_hit.v;
+            hit.prim_id = lanes.position(group_hit.index);
+            prefetch_hit_data(hit.prim_id);
+            found = true;
+        }
+        lanes.clear();
+    };
+    // Sibling leaves together (LeafVisits::with_siblings): their triangles share tests.
+    const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
+        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [] { return false; });
+        return false;
+    };
+    traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
+        bvh.nodes.data(), start, ray, counters, visit_leaves);
+    return found;
+}
+
+/// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
+/// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v/prim_id (mesh primID) and
+/// returns true; leaves hit.instance_id to the caller.
+inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray, Hit& hit,
+                                 TraversalCounters* counters) {
+    Hit leaf_order_hit = hit;
+    const PrimId* prim_ids = bvh.prim_ids.data();
+    const auto prefetch_prim_ids = [prim_ids](std::uint32_t position) {
+        __builtin_prefetch(prim_ids + position);
+    };
+    if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,
+                                         prefetch_prim_ids))
+        return false;
+    hit = leaf_order_hit;
+    hit.prim_id = prim_ids[leaf_order_hit.prim_id];
+    return true;
+}
+
+/// True when any triangle below `start` is hit within [ray.tnear, ray.tfar].
+inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray,
+                                TraversalCounters* counters) {
+    const TriangleGroupRay group_ray(ray.org, ray.dir);
+    LeafTriangleLanes lanes(bvh.triangles.data());
+    bool is_occluded = false;
+    const auto test_lanes = [&] {
+        is_occluded = is_occluded || occluded_triangle_lanes(lanes.lanes(), lanes.count(),
+                                                             group_ray, ray.tnear, ray.tfar);
+        lanes.clear();
+    };
+    const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
+        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [&] { return is_occluded; });
+        return is_occluded;
+    };
+    // Any order: the first hit ends the query, and sorting the children costs more than the
+    // nearer hits it would find first (measured on the shared scenes).
+    return traverse_bvh<TraversalOrder::any, LeafVisits::with_siblings>(
+        bvh.nodes.data(), start, ray, counters, visit_leaves);
+}
+
+}  // namespace REBRAID_SIMD_NAMESPACE
+}  // namespace rebraid

@@ -1,0 +1,26 @@
+#pragma once
+
+#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/wide_node.h"
+#include "rebraid/core/bbox.h"
+#include "rebraid/core/transform.h"
+
+namespace rebraid {
+
+/// The world-space box of the triangles under `node` of `bvh` mapped by `to_world`, to within
+/// `tolerance` of the node's projected extent per face (the transformed vertices instead
+/// of the transformed box of paper §5.4: tighter instance bounds). Conservative: it holds
+/// every transformed vertex, widened by a few float ulps of the coordinates involved so that the
+/// world-space box test never culls a hit the object-space triangle test finds.
+///
+/// Each of the six faces is a support value (the largest projection of a vertex onto a row of
+/// the transform, or its negation) found by branch and bound over the object BVH: children are
+/// visited in the order of their boxes' bound on it, and skipped once their bound cannot beat
+/// the best vertex found by more than the tolerance (their bound then counts instead), so a
+/// face costs a few root-to-leaf paths rather than a pass over the subtree's triangles. A
+/// tolerance of 0 gives the exact box of the vertices. `node_box` is the node's object-space
+/// box (as its parent stores it, or the BVH's bounds for the root).
+BBox3f vertex_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
+                           const AffineTransform& to_world, float tolerance = 0.01f);
+
+}  // namespace rebraid

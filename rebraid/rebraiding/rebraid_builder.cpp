@@ -1,0 +1,397 @@
+#include "rebraid/rebraiding/rebraid_builder.h"
+
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <limits>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "rebraid/bvh/binned_split.h"
+#include "rebraid/bvh/object_subtree_counts.h"
+#include "rebraid/bvh/wide_tree_grower.h"
+#include "rebraid/core/scratch_buffer.h"
+#include "rebraid/core/build_timer.h"
+#include "rebraid/core/error.h"
+#include "rebraid/rebraiding/bref.h"
+#include "rebraid/rebraiding/bref_budget.h"
+#include "rebraid/rebraiding/bref_opening.h"
+#include "rebraid/rebraiding/overlap_opening.h"
+#include "rebraid/rebraiding/rebraid_cost_guard.h"
+#include "rebraid/rebraiding/rebraid_termination.h"
+#include "rebraid/rebraiding/sah_aware_opening.h"
+#include "rebraid/top_level/bvh_stats.h"
+
+namespace rebraid {
+namespace {
+
+/// A segment after its opening step, ready to become a leaf or to be split.
+struct RebraidCandidate {
+    BRefSegment segment;
+    RangeInfo info;
+    BinnedSplit split;
+    bool is_leaf = true;
+    float half_area = 0.0f;  ///< info.bounds.half_area(), which node growth compares often
+
+    float area() const { return half_area; }
+    BBox3f bounds() const { return info.bounds; }
+    std::size_t size() const { return segment.size(); }
+};
+
+/// The re-braiding steps of §4.1 for one segment, as the policy of WideTreeGrower. Each
+/// split measures both children while partitioning and scans each child once for all the
+/// opening decisions (free-space share, termination, whether anything can open), so a
+/// level reads each BRef in four passes (partition, scan, open, bin) rather than seven.
+class RebraidPolicy {
+public:
+    RebraidPolicy(std::span<BuildPrim> prims, std::span<BuildPrim> scratch,
+                  std::span<BRefTarget> targets, const BRefSource& source,
+                  const RebraidSettings& settings)
+        : prims_(prims),
+          scratch_(scratch),
+          targets_(targets),
+          source_(source),
+          settings_(settings) {}
+
+    /// Steps (1)-(2): termination tests (§4.4), then opening (§4.2, §5.3); then the SAH split
+    /// search of step (3) (§4.3). `info` describes the segment's BRefs; `scan` is their
+    /// opening scan under the segment's criterion when the caller already made it.
+    RebraidCandidate prepare(BRefSegment segment, RangeInfo info, std::optional<OpeningScan> scan,
+                             bool median_only) const {
+        const std::size_t threshold = settings_.build.parallel_threshold;
+        if (segment.can_open && segment.free_space() > 0) {
+            const OpeningCriterion criterion = criterion_for(info.bounds);
+            if (!scan) scan = scan_for_opening(range(segment), targets_, criterion, threshold);
+            if (scan->is_single_instance ||
+                (segment.size() <= settings_.small_segment_brefs &&
+                 overlaps_little(range(segment), settings_.small_overlap_fraction))) {
+                segment.can_open = false;
+            } else if (scan->openable > 0) {  // otherwise no rule opens anything
+                const std::uint32_t opened = open_segment(segment, criterion, info);
+                opened_ += opened;
+            }
+        }
+        // Built field by field rather than zeroed and overwritten: prepare runs once per
+        // BRef and then some.
+        const std::uint32_t n = segment.size();
+        const float area = info.bounds.half_area();
+        BinnedSplit split;
+        bool is_leaf = true;
+        if (n > 1) {
+            if (!median_only) split = find_binned_split(range(segment), info, settings_.build);
+            is_leaf = n <= settings_.build.max_leaf_size;
+            if (split.is_valid() && is_leaf) {
+                const float leaf_cost =
+                    settings_.build.intersection_cost * area * float(info.weight);
+                const float split_cost = settings_.build.traversal_cost * area +
+                                         settings_.build.intersection_cost * split.cost;
+                is_leaf = leaf_cost <= split_cost;
+            }
+        }
+        return {segment, info, split, is_leaf, area};
+    }
+
+    /// Step (3)-(4): partition, share the free space (§5.2), prepare both children.
+    std::array<RebraidCandidate, 2> split(const RebraidCandidate& c, bool median_only) const {
+        const BRefSegment& segment = c.segment;
+        const std::size_t threshold = settings_.build.parallel_threshold;
+        std::uint32_t mid = segment.start + segment.size() / 2;
+        RangeInfo left_info, right_info;
+        if (c.split.is_valid()) {
+            // Measures both sides on the way; each task's segments own the same part of the
+            // scratch buffer as of the BRef array.
+            const SplitResult result =
+                apply_binned_split(range(segment), c.split,
+                                   scratch_.subspan(segment.start, segment.size()), threshold);
+            mid = segment.start + result.left_count;
+            left_info = result.left;
+            right_info = result.right;
+        } else {
+            left_info =
+                compute_range_info(prims_.subspan(segment.start, mid - segment.start), threshold);
+            right_info = compute_range_info(prims_.subspan(mid, segment.end - mid), threshold);
+        }
+        BRefSegment left{segment.start, mid, mid, segment.next_target, segment.can_open};
+        BRefSegment right{mid, segment.end, segment.end, segment.next_target, segment.can_open};
+        std::optional<OpeningScan> left_scan, right_scan;
+        if (segment.can_open && segment.free_space() > 0) {
+            left_scan = scan_for_opening(prims_.subspan(segment.start, mid - segment.start),
+                                         targets_, criterion_for(left_info.bounds), threshold);
+            right_scan = scan_for_opening(prims_.subspan(mid, segment.end - mid), targets_,
+                                          criterion_for(right_info.bounds), threshold);
+            std::tie(left, right) =
+                split_free_space(segment, mid, left_scan->openable, right_scan->openable, prims_);
+        }
+        return {prepare(left, left_info, left_scan, median_only),
+                prepare(right, right_info, right_scan, median_only)};
+    }
+
+    NodeRef make_leaf(const RebraidCandidate& c) const {
+        return NodeRef::leaf(c.segment.start, c.segment.size());
+    }
+
+    std::uint64_t opened() const { return opened_; }
+
+private:
+    OpeningCriterion criterion_for(const BBox3f& bounds) const {
+        return OpeningCriterion(bounds, settings_.open_threshold, settings_.open_leaves);
+    }
+
+    /// Step (2): opens the BRefs the settings' rule picks (§4.2, §5.3, or the overlap and
+    /// SAH-aware rules beyond the paper) and updates `info` when it did; returns how many.
+    std::uint32_t open_segment(BRefSegment& segment, OpeningCriterion criterion,
+                               RangeInfo& info) const {
+        const std::size_t threshold = settings_.build.parallel_threshold;
+        std::vector<std::uint8_t> overlapping;
+        if (settings_.opening_rule == OpeningRule::overlap) {
+            overlapping = select_overlapping(range(segment), targets_, info.bounds,
+                                             settings_.overlap_threshold);
+            criterion.selected = overlapping;
+        }
+        if (settings_.opening_rule != OpeningRule::extent &&
+            !estimate_opening(range(segment), targets_, criterion, source_, segment.free_space(),
+                              settings_)
+                 .lowers_sah())
+            return 0;  // the subtree below may still open: its segments are smaller
+        return open_brefs(segment, prims_, targets_, criterion, source_, threshold, &info);
+    }
+
+    std::span<BuildPrim> range(const BRefSegment& s) const {
+        return prims_.subspan(s.start, s.size());
+    }
+
+    std::span<BuildPrim> prims_;
+    std::span<BuildPrim> scratch_;
+    std::span<BRefTarget> targets_;
+    const BRefSource& source_;
+    const RebraidSettings& settings_;
+    // A statistic only: the sum is the same whatever order the tasks add in.
+    mutable std::atomic<std::uint64_t> opened_{0};
+};
+
+/// Leaves reference the BRef array with its unused free space in between; renumber them into
+/// a dense item list (in array order) and fill the top level's items.
+/// `item_slots` receives each item's target slot.
+void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
+                std::span<const BRefTarget> targets, std::vector<std::uint32_t>& item_slots) {
+    std::vector<std::uint32_t> dense(prims.size() + 1, 0);
+    std::vector<char> used(prims.size(), 0);
+    auto mark = [&](NodeRef ref) {
+        for (std::uint32_t i = 0; i < ref.prim_count(); ++i) used[ref.first_prim() + i] = 1;
+    };
+    if (top.root.is_leaf()) mark(top.root);
+    for (const WideNode& node : top.nodes)
+        for (NodeRef ref : node.children)
+            if (ref.is_leaf()) mark(ref);
+    for (std::size_t i = 0; i < prims.size(); ++i) dense[i + 1] = dense[i] + used[i];
+    top.items.resize(dense.back());
+    top.item_bounds.resize(dense.back());
+    item_slots.resize(dense.back());
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        if (!used[i]) continue;
+        item_slots[dense[i]] = prims[i].id;
+        top.items[dense[i]] = targets[prims[i].id];
+        top.item_bounds[dense[i]] = prims[i].bounds;
+    }
+    auto renumber = [&](NodeRef ref) {
+        return NodeRef::leaf(dense[ref.first_prim()], ref.prim_count());
+    };
+    if (top.root.is_leaf()) top.root = renumber(top.root);
+    for (WideNode& node : top.nodes)
+        for (NodeRef& ref : node.children)
+            if (ref.is_leaf()) ref = renumber(ref);
+}
+
+/// A build and, when tracked, its cost up to a constant of the instance set (see
+/// rebraid_cost_guard.h).
+struct TrackedBuild {
+    RebraidBuild build;
+    double cost = 0.0;
+};
+
+TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                const RebraidSettings& settings,
+                                std::span<const InstanceId> instances, bool is_tracking_cost);
+
+/// The part of a top level's SAH cost (unnormalised) its own nodes and items make: the
+/// inner nodes' half areas and each item's box area, times its triangles for a leaf item.
+double top_level_own_cost(const TopLevelBvh& top) {
+    double cost = top_inner_cost(top);
+    for (std::size_t i = 0; i < top.items.size(); ++i) {
+        const NodeRef node = top.items[i].object_node;
+        cost += double(top.item_bounds[i].half_area()) * (node.is_leaf() ? node.prim_count() : 1);
+    }
+    return cost;
+}
+
+/// The budget search (RebraidSettings::budget_doublings): `first` is the tracked build at the
+/// rule's budget; builds with the budget doubled follow while each lowers the exact cost by
+/// at least budget_search_min_gain, and the cheapest build is returned. The budgets tried and
+/// the costs compared depend on the input only, so the choice is the same on any thread count.
+TrackedBuild search_larger_budgets(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                   const RebraidSettings& settings,
+                                   std::span<const InstanceId> instances, TrackedBuild first) {
+    TrackedBuild best = std::move(first);
+    RebraidSettings larger = settings;
+    std::uint64_t last_budget = best.build.budget;
+    for (std::uint32_t step = 0; step < settings.budget_doublings; ++step) {
+        if (larger.budget_rule == BudgetRule::per_instance)
+            larger.budget_factor *= 2.0f;
+        else
+            larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref * 0.5f);
+        TrackedBuild candidate = build_rebraid_once(scene, object_bvhs, larger, instances, true);
+        // The caps (every primitive a BRef, max_budget) stop the budget from growing.
+        if (candidate.build.budget <= last_budget) break;
+        last_budget = candidate.build.budget;
+        // The tracked costs are exact up to a constant, so the gain is measured against the
+        // part of the cost a top level owns (its nodes and the boxes that enter the objects).
+        const bool is_worth_doubling_again =
+            best.cost - candidate.cost >=
+            double(settings.budget_search_min_gain) * top_level_own_cost(best.build.top);
+        if (candidate.cost < best.cost) best = std::move(candidate);
+        if (!is_worth_doubling_again) break;
+    }
+    return best;
+}
+
+}  // namespace
+
+RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                           const RebraidSettings& settings) {
+    std::vector<InstanceId> every_instance(scene.instances.size());
+    for (std::size_t i = 0; i < every_instance.size(); ++i) every_instance[i] = InstanceId(i);
+    return build_rebraid(scene, object_bvhs, settings, every_instance);
+}
+
+RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                           const RebraidSettings& settings, std::span<const InstanceId> instances) {
+    settings.validate();
+    const BuildTimer timer;
+    const bool is_guarded =
+        settings.opening_rule != OpeningRule::extent && settings.keep_cheaper_unopened;
+    const bool is_searching = settings.budget_doublings > 0;
+    TrackedBuild result =
+        build_rebraid_once(scene, object_bvhs, settings, instances, is_guarded || is_searching);
+    if (is_searching)
+        result = search_larger_budgets(scene, object_bvhs, settings, instances, std::move(result));
+    if (is_guarded && result.build.opened > 0) {
+        // The opening rules estimate; the guard measures: the same instances without any
+        // opening, kept when its exact cost is not higher.
+        RebraidSettings unopened = settings;
+        unopened.opening_rule = OpeningRule::extent;
+        unopened.budget_rule = BudgetRule::per_instance;
+        unopened.budget_factor = 0.0f;
+        TrackedBuild plain = build_rebraid_once(scene, object_bvhs, unopened, instances, true);
+        if (plain.cost <= result.cost) {
+            plain.build.budget = result.build.budget;
+            result = std::move(plain);
+        }
+    }
+    result.build.top.build_ms = timer.elapsed_ms();
+    return std::move(result.build);
+}
+
+namespace {
+
+TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                const RebraidSettings& settings,
+                                std::span<const InstanceId> instances, bool is_tracking_cost) {
+    if (object_bvhs.size() != scene.meshes.size())
+        throw Error("build_rebraid: " + std::to_string(object_bvhs.size()) + " object BVHs for " +
+                    std::to_string(scene.meshes.size()) + " meshes");
+    std::vector<std::uint32_t> instance_mesh(scene.instances.size());
+    std::vector<AffineTransform> object_to_world(scene.instances.size());
+    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+        instance_mesh[i] = scene.instances[i].mesh_id;
+        object_to_world[i] = scene.instances[i].object_to_world;
+    }
+    std::uint64_t seed_count = 0, primitive_count = 0;
+    for (const InstanceId i : instances) {
+        if (i >= scene.instances.size())
+            throw Error("build_rebraid: instance " + std::to_string(i) + " of a scene with " +
+                        std::to_string(scene.instances.size()) + " instances");
+        const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
+        if (bvh.root.is_empty()) continue;
+        ++seed_count;
+        primitive_count += bvh.prim_count();
+    }
+
+    // §5.2: one array for every BRef the build can ever hold, allocated once.
+    RebraidBuild result;
+    const std::uint64_t limit = NodeRef::kMaxFirst;
+    if (seed_count > limit)
+        throw Error("build_rebraid: " + std::to_string(seed_count) +
+                    " instances exceed the limit of " + std::to_string(limit));
+    result.budget =
+        std::min(bref_budget(settings, seed_count, primitive_count), limit - seed_count);
+    const auto capacity = std::uint32_t(seed_count + result.budget);
+    // Uninitialised: a slot is written before any segment holds it (free space is filled by
+    // opening), and only slots that leaves hold are read at the end.
+    const ScratchBuffer<BuildPrim> prim_buffer(capacity), scratch_buffer(capacity);
+    const ScratchBuffer<BRefTarget> target_buffer(capacity);
+    const std::span<BuildPrim> prims = prim_buffer.span();
+    const std::span<BRefTarget> targets = target_buffer.span();
+    std::vector<double> node_cost(is_tracking_cost ? capacity : 0);
+    std::vector<double> removed_cost(is_tracking_cost ? capacity : 0);
+    std::uint32_t n = 0;
+    for (const InstanceId i : instances) {
+        const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
+        if (bvh.root.is_empty()) continue;
+        // One BRef per instance at its object root, with the root's primitive count (§3.2).
+        prims[n] = {
+            bref_world_bounds(bvh, bvh.root, bvh.bounds, object_to_world[i], settings.bounds_rule),
+            n, bvh.prim_count()};
+        targets[n] = {InstanceId(i), bvh.root};
+        if (is_tracking_cost)
+            node_cost[n] = mapped_box_half_area(bvh.bounds, object_to_world[i]) *
+                           (bvh.root.is_leaf() ? bvh.root.prim_count() : 1.0);
+        ++n;
+    }
+
+    // The paper's rule estimates child counts (§5.3); the others use the real ones, counted
+    // for the meshes whose BRefs open.
+    std::optional<LazySubtreeCounts> subtree_counts;
+    if (settings.opening_rule != OpeningRule::extent) subtree_counts.emplace(object_bvhs);
+    const BRefSource source{object_bvhs,
+                            instance_mesh,
+                            object_to_world,
+                            settings.bounds_rule,
+                            subtree_counts ? &*subtree_counts : nullptr,
+                            settings.open_leaves,
+                            node_cost,
+                            removed_cost};
+    const RebraidPolicy policy(prims, scratch_buffer.span(), targets, source, settings);
+    const std::size_t threshold = settings.build.parallel_threshold;
+    const RebraidCandidate root =
+        policy.prepare(BRefSegment{0, n, capacity, n, true},
+                       compute_range_info(prims.first(n), threshold), {}, false);
+    TopLevelBvh& top = result.top;
+    top.bounds = root.info.bounds;
+    // Node numbering as grow_wide_subtree's with the parallel threshold; tasks as fine as
+    // the object builder's, and none on one thread (where the tree then needs no
+    // renumbering pass). The tree is the same either way.
+    const std::size_t threads = std::min<std::size_t>(
+        tbb::this_task_arena::max_concurrency(),
+        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    const std::size_t task_threshold =
+        threads > 1 ? settings.build.task_threshold : std::numeric_limits<std::size_t>::max();
+    const WideTreeGrower<RebraidPolicy, RebraidCandidate> grower(policy, threshold, task_threshold);
+    if (n > 0) top.root = root.is_leaf ? policy.make_leaf(root) : grower.grow(root, top.nodes);
+    std::vector<std::uint32_t> item_slots;
+    emit_items(top, prims, targets, item_slots);
+    result.brefs = top.items.size();
+    result.opened = policy.opened();
+    TrackedBuild tracked{std::move(result), 0.0};
+    if (is_tracking_cost)
+        tracked.cost = cost_above_objects(tracked.build.top, item_slots, node_cost, removed_cost);
+    return tracked;
+}
+
+}  // namespace
+
+}  // namespace rebraid

@@ -1,0 +1,116 @@
+#pragma once
+
+#include <cstdint>
+
+#include "rebraid/bvh/build_settings.h"
+#include "rebraid/rebraiding/bref_bounds.h"
+
+namespace rebraid {
+
+/// How the extra BRef space (the opening budget) is sized (paper §5.2).
+enum class BudgetRule {
+    /// budget = budget_factor x instances: the paper's rule for trees over instances.
+    per_instance,
+    /// budget = instanced primitives / primitives_per_bref: the paper's rule for trees over
+    /// objects built in world space.
+    per_primitive,
+};
+
+/// Which BRefs a segment opens (paper §4.2, and rules beyond the paper).
+enum class OpeningRule {
+    /// The paper's rule (§4.2): every inner-node BRef wider than `open_threshold` of the
+    /// segment's extent along its largest axis; child primitive counts are estimated as the
+    /// parent's divided by the number of children (§5.3).
+    extent,
+    /// The paper's candidates, opened only when the segment's estimated SAH falls
+    /// (sah_aware_opening.h); child primitive counts are the object BVH's real ones.
+    sah,
+    /// Candidates chosen by how much of their box overlaps BRefs of other instances
+    /// (overlap_opening.h), then the SAH test of `sah`.
+    overlap,
+};
+
+/// Parameters of the re-braiding top-level builder (Benthin et al. 2017). Defaults: the paper's
+/// threshold, budget and termination, with two rules beyond the paper that measured better on
+/// every scene (bench/RESULTS.md): `sah` opening and BRef bounds from the
+/// transformed vertices. paper_rules() gives the paper's rules alone.
+struct RebraidSettings {
+    /// A BRef is opened when its extent along the segment's largest axis exceeds this
+    /// fraction of the segment's extent (paper §4.2: 10%). 0 opens every inner-node BRef
+    /// (within the budget); 1 or more opens nothing.
+    float open_threshold = 0.10f;
+    /// Which rule sizes the budget.
+    BudgetRule budget_rule = BudgetRule::per_instance;
+    /// Extra BRefs per instance under BudgetRule::per_instance (paper §5.2: 4). 0 gives the
+    /// plain two-level top.
+    float budget_factor = 4.0f;
+    /// Instanced primitives per extra BRef under BudgetRule::per_primitive (paper: 1000).
+    float primitives_per_bref = 1000.0f;
+    /// Budget search: after the build at the rule's budget, build
+    /// again with the budget doubled, up to this many times, and keep the build of lowest
+    /// exact SAH cost (rebraid_cost_guard.h); stop doubling once a doubling lowers the cost by
+    /// less than `budget_search_min_gain`. 0 (the default) builds once, at the rule's budget.
+    /// Each step costs one more top-level build of twice the items.
+    std::uint32_t budget_doublings = 0;
+    /// Least cost reduction for the budget search to double again, relative to the part of
+    /// the SAH cost the top level itself makes (its nodes and the boxes entering objects).
+    float budget_search_min_gain = 0.01f;
+    /// Hard cap on the extra BRefs, whatever the rule gives: the BRef array (40 bytes per
+    /// BRef, plus as much again of build scratch) is allocated in full before the build
+    /// starts, so a huge budget_factor must not turn into gigabytes. The default, 2^22 extra
+    /// BRefs (160 MiB of array), is what the paper's factor of 4 needs for a million
+    /// instances. At most 2^27 - 1 (the top level's item limit). See bref_budget() for the
+    /// other cap.
+    std::uint64_t max_budget = std::uint64_t(1) << 22;
+    /// Segments with at most this many BRefs stop opening when their boxes overlap little
+    /// (paper §4.4: 4).
+    std::uint32_t small_segment_brefs = 4;
+    /// "Little" overlap for that test: every pairwise intersection of the segment's BRef
+    /// boxes has at most this fraction of the surface area of the smaller box.
+    float small_overlap_fraction = 0.1f;
+    /// World-space boxes of BRefs of transformed instances: the paper's transformed node box
+    /// (§5.4), the tighter union of transformed children, or the box of the transformed
+    /// vertices (bref_bounds.h).
+    BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_vertices;
+    /// Which BRefs are opened (see OpeningRule).
+    OpeningRule opening_rule = OpeningRule::sah;
+    /// Also open BRefs to object-BVH leaves of several triangles, into one BRef per triangle
+    /// (a leaf reference of count 1), when they meet the opening rule. For scenes of many tiny
+    /// objects whose whole BVH is one leaf or a few.
+    bool open_leaves = false;
+    /// OpeningRule::sah and overlap: SAH cost of entering an instance through one more BRef
+    /// (transforming the ray), per unit of the BRef's area, relative to one node visit. The
+    /// SAH `rebraid stats` reports does not count it (0); a positive value makes opening more
+    /// reluctant where many small BRefs would each cost a transform.
+    float instance_entry_cost = 0.0f;
+    /// OpeningRule::sah and overlap: wide top-level node levels the SAH estimate builds (by
+    /// binned SAH, like the builder) over the BRefs with and without opening, before it
+    /// assumes the nodes further down are as large as their parent. More levels judge large
+    /// segments better and cost more build time.
+    std::uint32_t estimate_levels = 2;
+    /// OpeningRule::sah and overlap: when the build opened anything, also build the top
+    /// without opening and keep whichever has the lower exact SAH cost
+    /// (rebraid_cost_guard.h), so the rules never end above the unopened top. Costs one
+    /// plain top-level build.
+    bool keep_cheaper_unopened = true;
+    /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
+    /// cover at least this fraction of its box (estimated on a grid over the segment).
+    float overlap_threshold = 0.25f;
+    /// Binning, SAH costs and the serial threshold of the top-level build (leaves hold one
+    /// BRef: max_leaf_size is 1).
+    BuildSettings build{.max_leaf_size = 1};
+
+    /// Throws rebraid::Error naming the field and value when a setting is out of range.
+    void validate() const;
+
+    /// The paper's rules alone: the extent opening rule (§4.2) with estimated child counts
+    /// (§5.3) and transformed node boxes (§5.4); everything else as the defaults.
+    static RebraidSettings paper_rules() {
+        RebraidSettings settings;
+        settings.bounds_rule = BRefBoundsRule::transformed_box;
+        settings.opening_rule = OpeningRule::extent;
+        return settings;
+    }
+};
+
+}  // namespace rebraid

@@ -1,0 +1,155 @@
+#include "rebraid/rebraiding/sah_aware_opening.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
+#include <array>
+#include <vector>
+
+#include "rebraid/bvh/binned_split.h"
+#include "rebraid/top_level/bvh_stats.h"
+
+namespace rebraid {
+namespace {
+
+constexpr double kChildrenPerNode = kBvhWidth - 1;
+
+/// Estimates over at least this many boxes run their independent parts as parallel tasks
+/// (the virtual builds with and without opening, and the groups below the first level):
+/// at the top of the tree they are the rule's longest serial stretches.
+constexpr std::size_t kParallelEstimateBoxes = 256;
+
+/// Half-area cost of the wide nodes a subtree over `count` boxes inside a box of half area
+/// `area` needs, when nothing is known about how they shrink: (count - 1) / 7 nodes, each
+/// as large as the box (an overestimate that grows with the count).
+double unshrunk_cost(double area, std::size_t count) {
+    return count <= 1 ? 0.0 : area * double(count - 1) / kChildrenPerNode;
+}
+
+/// Estimated half-area cost of the top-level nodes over `boxes` (weights 1; reordered): the
+/// wide node over all of them, made as the builder makes it (binned SAH splits of its
+/// largest child until it has kBvhWidth children), then `levels - 1` more wide levels the
+/// same way, then unshrunk_cost below. `info` is compute_range_info of `boxes`, which the
+/// caller has at hand (each group's comes from its split).
+double estimate_top_cost(std::span<BuildPrim> boxes, const RangeInfo& info,
+                         const BuildSettings& build, int levels) {
+    if (boxes.size() <= 1) return 0.0;
+    const double area = info.bounds.half_area();
+    if (levels == 0) return unshrunk_cost(area, boxes.size());
+    struct Group {
+        std::span<BuildPrim> boxes;
+        RangeInfo info;
+        bool can_split = true;
+    };
+    // At most kBvhWidth groups: no allocation.
+    std::array<Group, kBvhWidth> groups;
+    std::size_t group_count = 1;
+    groups[0] = {boxes, info, true};
+    while (group_count < std::size_t(kBvhWidth)) {
+        Group* largest = nullptr;
+        for (std::size_t i = 0; i < group_count; ++i) {
+            Group& g = groups[i];
+            if (g.can_split && g.boxes.size() > 1 &&
+                (!largest || g.info.bounds.half_area() > largest->info.bounds.half_area()))
+                largest = &g;
+        }
+        if (!largest) break;
+        const BinnedSplit split = find_binned_split(largest->boxes, largest->info, build);
+        if (!split.is_valid()) {  // no plane separates the centroids
+            largest->can_split = false;
+            continue;
+        }
+        const auto middle = std::partition(largest->boxes.begin(), largest->boxes.end(),
+                                           [&](const BuildPrim& b) { return split.goes_left(b); });
+        const auto left_count = std::size_t(middle - largest->boxes.begin());
+        const std::span<BuildPrim> left = largest->boxes.first(left_count);
+        const std::span<BuildPrim> right = largest->boxes.subspan(left_count);
+        *largest = {left, compute_range_info(left, build.parallel_threshold), true};
+        groups[group_count++] = {right, compute_range_info(right, build.parallel_threshold), true};
+    }
+    // The groups' costs in parallel for large ranges, summed in group order either way.
+    std::array<double, kBvhWidth> group_costs{};
+    auto group_cost = [&](std::size_t i) {
+        const Group& g = groups[i];
+        group_costs[i] = g.can_split ? estimate_top_cost(g.boxes, g.info, build, levels - 1)
+                                     : unshrunk_cost(g.info.bounds.half_area(), g.boxes.size());
+    };
+    if (boxes.size() >= kParallelEstimateBoxes && levels > 1)
+        tbb::parallel_for(std::size_t(0), group_count, group_cost);
+    else
+        for (std::size_t i = 0; i < group_count; ++i) group_cost(i);
+    double cost = area;
+    for (std::size_t i = 0; i < group_count; ++i) cost += group_costs[i];
+    return cost;
+}
+
+}  // namespace
+
+OpeningEstimate estimate_opening(std::span<const BuildPrim> prims,
+                                 std::span<const BRefTarget> targets,
+                                 const OpeningCriterion& criterion, const BRefSource& source,
+                                 std::uint32_t free_space, const RebraidSettings& settings) {
+    OpeningEstimate estimate;
+    const double entry_cost = settings.instance_entry_cost;
+    std::vector<BuildPrim> closed(prims.size()), opened;
+    opened.reserve(prims.size() + free_space);
+    double closed_items = 0.0, opened_items = 0.0;  // only the BRefs that would open
+    std::uint64_t offset = 0;
+    bool is_full = false;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        const BuildPrim& prim = prims[i];
+        closed[i] = {prim.bounds, 0, 1};
+        const BRefTarget& target = targets[prim.id];
+        if (!is_full && criterion.wants_to_open(prim, target, i)) {
+            const std::uint32_t extra = bref_child_count(source, target) - 1;
+            if (offset + extra > free_space) {
+                is_full = true;  // open_brefs opens nothing from here on either
+            } else {
+                offset += extra;
+                ++estimate.opened;
+                const ObjectBvh& bvh = source.bvh_of(target);
+                const AffineTransform& to_world = source.object_to_world[target.instance_id];
+                const NodeRef node = target.object_node;
+                const double area = prim.bounds.half_area();
+                closed_items +=
+                    area * (node.is_leaf() ? node.prim_count() : 1.0) + entry_cost * area;
+                for_each_bref_child(source, target, [&](NodeRef child, const BBox3f& box) {
+                    const BBox3f bounds =
+                        bref_world_bounds(bvh, child, box, to_world, source.bounds_rule);
+                    const double tests = child.is_leaf() ? child.prim_count() : 1.0;
+                    if (node.is_inner())
+                        closed_items += mapped_box_half_area(box, to_world) * tests;
+                    const double child_area = bounds.half_area();
+                    opened_items += child_area * tests + entry_cost * child_area;
+                    opened.push_back({bounds, 0, 1});
+                });
+                continue;
+            }
+        }
+        opened.push_back(closed[i]);
+    }
+    if (estimate.opened == 0) return estimate;
+    const int levels = int(settings.estimate_levels);
+    double closed_top = 0.0, opened_top = 0.0;
+    const std::size_t threshold = settings.build.parallel_threshold;
+    auto estimate_closed = [&] {
+        closed_top = estimate_top_cost(closed, compute_range_info(closed, threshold),
+                                       settings.build, levels);
+    };
+    auto estimate_opened = [&] {
+        opened_top = estimate_top_cost(opened, compute_range_info(opened, threshold),
+                                       settings.build, levels);
+    };
+    if (prims.size() >= kParallelEstimateBoxes) {
+        tbb::parallel_invoke(estimate_closed, estimate_opened);
+    } else {
+        estimate_closed();
+        estimate_opened();
+    }
+    estimate.closed_cost = closed_top + closed_items;
+    estimate.opened_cost = opened_top + opened_items;
+    return estimate;
+}
+
+}  // namespace rebraid

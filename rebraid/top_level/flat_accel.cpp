@@ -1,0 +1,128 @@
+#include "rebraid/top_level/flat_accel.h"
+
+#include <tbb/parallel_for.h>
+
+#include "rebraid/bvh/object_bvh_builder.h"
+#include "rebraid/bvh/object_traversal.h"
+#include "rebraid/core/build_timer.h"
+#include "rebraid/core/huge_pages.h"
+#include "rebraid/core/structure_hash.h"
+#include "rebraid/top_level/bvh_stats.h"
+
+namespace rebraid {
+namespace {
+
+/// Every instance's triangles as one world-space mesh (triangles in instance order).
+Mesh make_world_mesh(const Scene& scene, std::vector<InstanceId>& triangle_instance,
+                     std::vector<PrimId>& triangle_prim) {
+    std::vector<std::uint64_t> vertex_offset(scene.instances.size() + 1, 0);
+    std::vector<std::uint64_t> triangle_offset(scene.instances.size() + 1, 0);
+    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+        const Mesh& mesh = scene.meshes[scene.instances[i].mesh_id];
+        vertex_offset[i + 1] = vertex_offset[i] + mesh.positions.size();
+        triangle_offset[i + 1] = triangle_offset[i] + mesh.triangles.size();
+    }
+    Mesh world;
+    world.name = "world";
+    world.positions.resize(vertex_offset.back());
+    world.triangles.resize(triangle_offset.back());
+    triangle_instance.resize(triangle_offset.back());
+    triangle_prim.resize(triangle_offset.back());
+    tbb::parallel_for(std::size_t(0), scene.instances.size(), [&](std::size_t i) {
+        const Instance& instance = scene.instances[i];
+        const Mesh& mesh = scene.meshes[instance.mesh_id];
+        const auto base = std::uint32_t(vertex_offset[i]);
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+            world.positions[base + v] = instance.object_to_world.transform_point(mesh.positions[v]);
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const std::size_t out = triangle_offset[i] + t;
+            const Triangle& tri = mesh.triangles[t];
+            world.triangles[out] = {base + tri[0], base + tri[1], base + tri[2]};
+            triangle_instance[out] = InstanceId(i);
+            triangle_prim[out] = PrimId(t);
+        }
+    });
+    return world;
+}
+
+/// Renumbers the world triangles in the BVH's leaf order (bvh.prim_ids becomes the identity):
+/// a hit's leaf position then names its instance and primID with one lookup instead of two
+/// dependent ones, and the arrays are read in the order traversal touches them.
+void renumber_in_leaf_order(ObjectBvh& bvh, std::vector<InstanceId>& triangle_instance,
+                            std::vector<PrimId>& triangle_prim) {
+    const std::size_t count = bvh.prim_ids.size();
+    std::vector<InstanceId> instances;
+    std::vector<PrimId> prims;
+    reserve_on_huge_pages(instances, count);
+    reserve_on_huge_pages(prims, count);
+    instances.resize(count);
+    prims.resize(count);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+        const PrimId world_prim = bvh.prim_ids[i];
+        instances[i] = triangle_instance[world_prim];
+        prims[i] = triangle_prim[world_prim];
+        bvh.prim_ids[i] = PrimId(i);
+    });
+    triangle_instance = std::move(instances);
+    triangle_prim = std::move(prims);
+}
+
+}  // namespace
+
+FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
+    scene.validate();
+    const BuildTimer timer;
+    const Mesh world = make_world_mesh(scene, triangle_instance_, triangle_prim_);
+    bvh_ = build_object_bvh(world, settings);
+    renumber_in_leaf_order(bvh_, triangle_instance_, triangle_prim_);
+    build_info_.build_ms = timer.elapsed_ms();
+    build_info_.triangles = scene.instanced_triangle_count();
+    build_info_.instances = scene.instances.size();
+    build_info_.meshes = scene.meshes.size();
+}
+
+Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
+    Hit hit;
+    TraversalRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
+    // The id lookup after traversal would miss the cache on large scenes: the ids of each
+    // hit are asked for as it is found.
+    const InstanceId* instances = triangle_instance_.data();
+    const PrimId* prims = triangle_prim_.data();
+    const auto prefetch_ids = [instances, prims](std::uint32_t position) {
+        __builtin_prefetch(instances + position);
+        __builtin_prefetch(prims + position);
+    };
+    if (intersect_object_bvh_leaf_order(bvh_, bvh_.root, traversal_ray, hit, counters,
+                                        prefetch_ids)) {
+        const PrimId world_prim = hit.prim_id;
+        hit.instance_id = triangle_instance_[world_prim];
+        hit.prim_id = triangle_prim_[world_prim];
+    }
+    return hit;
+}
+
+bool FlatAccel::occluded(const Ray& ray) const {
+    TraversalRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    return occluded_object_bvh(bvh_, bvh_.root, traversal_ray, nullptr);
+}
+
+AccelStats FlatAccel::stats() const {
+    AccelStats stats = build_info_;
+    stats.sah = object_bvh_sah(bvh_);
+    const TreeCounts counts = count_tree(bvh_.nodes, bvh_.root);
+    stats.nodes = counts.inner_nodes;
+    stats.leaves = counts.leaves;
+    stats.memory_bytes = bvh_.memory_bytes() + triangle_instance_.size() * sizeof(InstanceId) +
+                         triangle_prim_.size() * sizeof(PrimId);
+    StructureHash hash;
+    hash.add<WideNode>(bvh_.nodes);
+    hash.add_value(bvh_.root);
+    hash.add<PrimId>(bvh_.prim_ids);
+    hash.add<InstanceId>(triangle_instance_);
+    hash.add<PrimId>(triangle_prim_);
+    stats.structure_hash = hash.value();
+    return stats;
+}
+
+}  // namespace rebraid

@@ -1,0 +1,61 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rebraid/bvh/build_settings.h"
+#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/object_bvh_builder.h"
+#include "rebraid/core/accel.h"
+#include "rebraid/core/scene.h"
+#include "rebraid/top_level/top_level_bvh.h"
+
+namespace rebraid {
+
+/// A two-level structure: object BVHs per mesh plus a top level whose leaves reference
+/// (instance, object node) pairs. Serves both the plain two-level top and the re-braided one:
+/// the same traversal runs on both (paper §5.5). A ray entering a leaf item is mapped into
+/// the instance's object space once per item and continues at the item's object node.
+class InstancedAccel final : public Accel {
+public:
+    /// `build_info` carries the build timings and builder-specific figures (BRefs, budget)
+    /// for stats(); the rest of the statistics are computed from the structure.
+    InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs, TopLevelBvh top,
+                   const AccelStats& build_info);
+
+    Hit intersect_counted(const Ray& ray, TraversalCounters* counters) const override;
+    bool occluded(const Ray& ray) const override;
+    AccelStats stats() const override;
+
+    const TopLevelBvh& top_level() const { return top_; }
+    const std::vector<ObjectBvh>& object_bvhs() const { return object_bvhs_; }
+    /// Hands the object BVHs back, e.g. to update them for the next frame of an animation
+    /// without copying the static ones; the structure is then fit only for destruction.
+    std::vector<ObjectBvh> release_object_bvhs() && { return std::move(object_bvhs_); }
+    /// Hands the top level back, e.g. for an incremental top to rebuild the next frame's in
+    /// the same arrays; the structure is then fit only for destruction or
+    /// release_object_bvhs().
+    TopLevelBvh release_top_level() && { return std::move(top_); }
+    /// Mesh of each instance (index = InstanceId).
+    const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
+
+private:
+    /// Prefetches what entering the first item of top-level leaf `leaf` reads first.
+    void prefetch_item_target(NodeRef leaf) const;
+
+    std::vector<ObjectBvh> object_bvhs_;
+    TopLevelBvh top_;
+    std::vector<std::uint32_t> instance_mesh_;
+    std::vector<AffineTransform> object_to_world_;
+    std::vector<AffineTransform> world_to_object_;
+    /// 1 where an instance's transform is the identity: rays enter it unmapped.
+    std::vector<std::uint8_t> instance_is_identity_;
+    AccelStats build_info_;
+};
+
+/// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).
+InstancedAccel build_two_level_accel(
+    const Scene& scene, const ObjectBvhBuilder& object_builder = own_object_bvh_builder(),
+    const BuildSettings& top_settings = {.max_leaf_size = 1});
+
+}  // namespace rebraid

@@ -1,0 +1,32 @@
+#pragma once
+
+#include <span>
+
+#include "rebraid/bvh/build_settings.h"
+#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/core/scene.h"
+#include "rebraid/top_level/top_level_bvh.h"
+
+namespace rebraid {
+
+/// Settings of the plain top-level builder: one top-level leaf per instance.
+inline BuildSettings default_top_level_settings() {
+    BuildSettings settings;
+    settings.max_leaf_size = 1;
+    return settings;
+}
+
+/// The plain two-level top: binned SAH over each instance's world bounds (its object root
+/// box transformed, conservatively), each bin weighted by the instance's triangle count,
+/// leaves referencing object roots. Instances of empty meshes are left out.
+TopLevelBvh build_two_level(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                            const BuildSettings& settings = default_top_level_settings());
+
+/// Builds a top-level BVH over `items` whose world bounds and prim counts are given; shared
+/// by the plain and re-braided builders for the final emission.
+TopLevelBvh build_top_level_over_items(std::vector<TopLevelItem> items,
+                                       std::vector<BBox3f> item_bounds,
+                                       std::span<const std::uint32_t> item_prim_counts,
+                                       const BuildSettings& settings);
+
+}  // namespace rebraid

@@ -1,0 +1,347 @@
+// Structures that follow an animation (rebraid/dynamic_scene*.h, embree_glue/
+// embree_dynamic_scene.h) against Embree built from scratch on the same deformed frame.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <tbb/global_control.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "embree_glue/reference/embree_bvh_builder.h"
+#include "embree_glue/reference/embree_dynamic_scene.h"
+#include "embree_glue/reference/embree_reference.h"
+#include "rebraid/dynamic/dynamic_scene.h"
+#include "rebraid/dynamic/dynamic_scene_accel.h"
+#include "rebraid/generators/random_rays.h"
+#include "rebraid/generators/twisting_object.h"
+#include "rebraid/io/gltf_animation.h"
+#include "rebraid/io/gltf_dynamic_object.h"
+#include "rebraid/io/gltf_scene.h"
+#include "rebraid/io/ray_file.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/rebraiding/rebraid_builder.h"
+#include "rebraid/top_level/bvh_stats.h"
+#include "support/gltf_animation_files.h"
+#include "support/hit_comparison.h"
+#include "support/test_scenes.h"
+
+namespace rebraid {
+namespace {
+
+constexpr int kFrameCount = 4;
+constexpr float kTimeStep = 0.37f;  // not a divisor of the period: every frame differs
+
+std::unique_ptr<AnimatedObject> small_twisting_object() {
+    return make_twisting_object({.path_segment_count = 96, .tube_segment_count = 8});
+}
+
+Scene small_static_scene() {
+    return test::make_overlap_scene(30, 5);
+}
+
+TEST(DynamicScene, PoseMovesOnlyTheDynamicMeshes) {
+    const auto object = small_twisting_object();
+    const Scene static_scene = small_static_scene();
+    DynamicScene dynamic(static_scene, *object, {.copy_count = 3});
+    ASSERT_EQ(dynamic.scene().meshes.size(), static_scene.meshes.size() + 3);
+    ASSERT_EQ(dynamic.dynamic_meshes().size(), 3u);
+    const Scene before = dynamic.scene();
+    dynamic.pose(0.6f);
+    for (std::size_t m = 0; m < before.meshes.size(); ++m) {
+        const bool moved = before.meshes[m].positions != dynamic.scene().meshes[m].positions;
+        EXPECT_EQ(moved, dynamic.is_dynamic_mesh(MeshId(m))) << "mesh " << m;
+    }
+    for (std::size_t i = 0; i < static_scene.instances.size(); ++i)
+        EXPECT_EQ(dynamic.scene().instances[i].object_to_world.translation,
+                  static_scene.instances[i].object_to_world.translation);
+}
+
+TEST(DynamicScene, CopiesStandInsideTheStaticScenesFootprint) {
+    const auto object = small_twisting_object();
+    const Scene static_scene = small_static_scene();
+    const DynamicScene dynamic(static_scene, *object, {.copy_count = 4, .seed = 9});
+    const BBox3f bounds = static_scene.bounds();
+    for (std::size_t i = dynamic.static_instance_count(); i < dynamic.scene().instances.size();
+         ++i) {
+        const Vec3f centre = dynamic.scene().instance_bounds(InstanceId(i)).center();
+        EXPECT_GE(centre.x, bounds.min.x);
+        EXPECT_LE(centre.x, bounds.max.x);
+        EXPECT_GE(centre.z, bounds.min.z);
+        EXPECT_LE(centre.z, bounds.max.z);
+    }
+}
+
+/// Runs `frames` frames of `dynamic` through `accel` (pose, then update).
+template <class Updatable>
+void run_frames(DynamicScene& dynamic, Updatable& accel, int frames) {
+    for (int frame = 1; frame <= frames; ++frame) {
+        dynamic.pose(static_cast<float>(frame) * kTimeStep);
+        accel.update();
+    }
+}
+
+test::AccelAnswers embree_flat_answers(const Scene& scene, const std::vector<Ray>& rays) {
+    const glue::EmbreeFlatAccel reference(scene);
+    return test::trace_all(reference, rays);
+}
+
+TEST(DynamicFrames, EveryStrategyAndTopMatchEmbreeFlatOnTheDeformedFrame) {
+    const auto object = small_twisting_object();
+    for (DynamicTop top : {DynamicTop::two_level, DynamicTop::rebraid})
+        for (UpdateStrategy strategy : kUpdateStrategies) {
+            SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
+                         std::string(update_strategy_name(strategy)));
+            DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
+            DynamicSceneAccelSettings settings;
+            settings.top = top;
+            settings.update.strategy = strategy;
+            DynamicSceneAccel accel(dynamic, settings);
+            run_frames(dynamic, accel, kFrameCount);
+            const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 3);
+            test::expect_same_answers(embree_flat_answers(dynamic.scene(), rays),
+                                      test::trace_all(accel.accel(), rays),
+                                      test::tolerance_for(dynamic.scene().bounds()));
+        }
+}
+
+TEST(DynamicFrames, StaticMeshesFromAnotherBuilderMatchEmbreeFlat) {
+    // Spatial splits put a triangle in several leaves of a static mesh's tree: fine, as those
+    // trees are never refit.
+    const auto object = small_twisting_object();
+    for (DynamicTop top : {DynamicTop::rebraid, DynamicTop::rebraid_incremental}) {
+        SCOPED_TRACE(std::string(dynamic_top_name(top)));
+        DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});
+        DynamicSceneAccelSettings settings;
+        settings.top = top;
+        settings.update.strategy = UpdateStrategy::refit;
+        settings.static_builder = glue::embree_object_bvh_builder();
+        DynamicSceneAccel accel(dynamic, settings);
+        run_frames(dynamic, accel, kFrameCount);
+        // The static meshes' trees are Embree's, not the own builder's.
+        std::size_t differing = 0;
+        for (std::size_t m = 0; m < dynamic.static_mesh_count(); ++m) {
+            const ObjectBvh& used = accel.accel().object_bvhs()[m];
+            const ObjectBvh own = build_object_bvh(dynamic.scene().meshes[m]);
+            differing += used.nodes.size() != own.nodes.size() || used.prim_ids != own.prim_ids;
+        }
+        EXPECT_GT(differing, 0u);
+        const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 6);
+        test::expect_same_answers(embree_flat_answers(dynamic.scene(), rays),
+                                  test::trace_all(accel.accel(), rays),
+                                  test::tolerance_for(dynamic.scene().bounds()));
+    }
+}
+
+TEST(DynamicFrames, EmbreeMethodsMatchEmbreeFlatBuiltFromScratch) {
+    const auto object = small_twisting_object();
+    for (glue::EmbreeDynamicMode mode :
+         {glue::EmbreeDynamicMode::flat, glue::EmbreeDynamicMode::flat_refit,
+          glue::EmbreeDynamicMode::instanced}) {
+        SCOPED_TRACE(std::string(glue::embree_dynamic_mode_name(mode)));
+        DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
+        glue::EmbreeDynamicAccel accel(dynamic, mode);
+        run_frames(dynamic, accel, kFrameCount);
+        const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 4);
+        test::expect_same_answers(embree_flat_answers(dynamic.scene(), rays),
+                                  test::trace_all(accel, rays),
+                                  test::tolerance_for(dynamic.scene().bounds()));
+    }
+}
+
+TEST(DynamicFrames, RigidlyMovingGltfInstancesMatchEmbreeFlat) {
+    const std::string path = std::string(REBRAID_SHARED_SCENES) + "/motion_capture_rom.glb";
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is missing";
+    const auto object = load_gltf_animated_object(path);
+    ASSERT_FALSE(object->moving_instances().empty());
+    DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});
+    DynamicSceneAccel accel(dynamic, {});
+    glue::EmbreeDynamicAccel instanced(dynamic, glue::EmbreeDynamicMode::instanced);
+    for (int frame = 1; frame <= kFrameCount; ++frame) {
+        dynamic.pose(static_cast<float>(frame) * 0.8f);
+        accel.update();
+        instanced.update();
+    }
+    const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 5);
+    const test::AccelAnswers expected = embree_flat_answers(dynamic.scene(), rays);
+    const test::Tolerance tolerance = test::tolerance_for(dynamic.scene().bounds());
+    test::expect_same_answers(expected, test::trace_all(accel.accel(), rays), tolerance);
+    test::expect_same_answers(expected, test::trace_all(instanced, rays), tolerance);
+}
+
+std::uint64_t structure_hash_after_frames(UpdateStrategy strategy, DynamicTop top,
+                                          int thread_count) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(thread_count));
+    const auto object = small_twisting_object();
+    DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
+    DynamicSceneAccelSettings settings;
+    settings.top = top;
+    settings.update.strategy = strategy;
+    DynamicSceneAccel accel(dynamic, settings);
+    run_frames(dynamic, accel, kFrameCount);
+    return accel.accel().stats().structure_hash.value_or(0);
+}
+
+TEST(DynamicFrames, SameStructureOnOneAndTwoThreadsAfterFramesOfEveryStrategy) {
+    for (DynamicTop top : {DynamicTop::two_level, DynamicTop::rebraid})
+        for (UpdateStrategy strategy : kUpdateStrategies) {
+            SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
+                         std::string(update_strategy_name(strategy)));
+            const std::uint64_t one = structure_hash_after_frames(strategy, top, 1);
+            EXPECT_NE(one, 0u);
+            EXPECT_EQ(one, structure_hash_after_frames(strategy, top, 2));
+        }
+}
+
+TEST(DynamicFrames, RememberedSahEqualsAFullRecomputationAfterFrames) {
+    const auto object = small_twisting_object();
+    for (DynamicTop top :
+         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental}) {
+        SCOPED_TRACE(std::string(dynamic_top_name(top)));
+        DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
+        DynamicSceneAccelSettings settings;
+        settings.top = top;
+        settings.update.strategy = UpdateStrategy::refit;
+        DynamicSceneAccel accel(dynamic, settings);
+        for (int frame = 1; frame <= kFrameCount; ++frame) {
+            dynamic.pose(static_cast<float>(frame) * kTimeStep);
+            const DynamicFrameReport report = accel.update();
+            std::vector<AffineTransform> transforms;
+            for (const Instance& instance : dynamic.scene().instances)
+                transforms.push_back(instance.object_to_world);
+            const InstancedAccel& structure = accel.accel();
+            EXPECT_EQ(report.sah, top_level_sah(structure.top_level(), structure.object_bvhs(),
+                                                structure.instance_meshes(), transforms))
+                << "frame " << frame;
+            // From the second frame on, static items come from the cache: with a top whose
+            // static part stays the same, exactly the dynamic instances' items are computed
+            // (a full re-braid may open static instances differently from frame to frame).
+            if (frame == 1) continue;
+            std::size_t dynamic_items = 0;
+            for (const TopLevelItem& item : structure.top_level().items)
+                dynamic_items += item.instance_id >= dynamic.static_instance_count();
+            const std::size_t computed = accel.sah_cache().last_computed_count();
+            EXPECT_LT(computed, structure.top_level().items.size()) << "frame " << frame;
+            if (top != DynamicTop::rebraid) {
+                EXPECT_EQ(computed, dynamic_items) << "frame " << frame;
+            }
+            EXPECT_GT(accel.sah_cache().remembered_count(), 0u);
+        }
+    }
+}
+
+// ---- rebraid trace --time ----------------------------------------------------------------
+
+std::string shell_quote(const std::string& text) {
+    std::string quoted = "'";
+    for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
+/// Rays aimed at every triangle's centroid of `scene` from off its plane, both sides.
+std::vector<Ray> rays_at_triangles(const Scene& scene) {
+    std::vector<Ray> rays;
+    for (const Instance& instance : scene.instances) {
+        const Mesh& mesh = scene.meshes[instance.mesh_id];
+        for (PrimId p = 0; p < mesh.triangles.size(); ++p) {
+            auto corners = mesh.corners(p);
+            for (Vec3f& c : corners) c = instance.object_to_world.transform_point(c);
+            const Vec3f centroid = (corners[0] + corners[1] + corners[2]) / 3.0f;
+            const Vec3f normal = normalize(cross(corners[1] - corners[0], corners[2] - corners[0]));
+            for (float side : {1.0f, -1.0f}) {
+                Ray ray;
+                ray.org = centroid + normal * (3.0f * side);
+                ray.dir = normal * -side;
+                rays.push_back(ray);
+            }
+        }
+    }
+    return rays;
+}
+
+std::vector<std::string> trace_with_cli(const std::string& scene_path, const std::string& rays_path,
+                                        const std::string& time, const std::string& out_path) {
+    const std::string command = shell_quote(REBRAID_CLI) + " trace " + shell_quote(scene_path) +
+                                " " + shell_quote(rays_path) + " --time " + time + " -o " +
+                                shell_quote(out_path) + " 2>/dev/null";
+    const int status = std::system(command.c_str());
+    EXPECT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0) << command;
+    std::ifstream in(out_path);
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+}
+
+TEST(TraceCommand, TimeTracesTheSceneAsAnimatedAtThatTime) {
+    const std::string scene_path = test::write_two_joint_skin_file("trace_time_skin.glb", {});
+    GltfLoadResult loaded = load_gltf_scene_with_report(scene_path, {.keep_model = true});
+    const GltfAnimator animator(loaded);
+    Scene posed = loaded.scene;
+    animator.apply(0.5f, posed);
+    const std::vector<Ray> rays = rays_at_triangles(posed);
+    const std::string dir = REBRAID_TEST_TMP;
+    const std::string rays_path = dir + "/trace_time_rays.txt";
+    {
+        std::ofstream out(rays_path);
+        write_rays(out, rays);
+    }
+    const InstancedAccel expected_accel = build_rebraid_accel(posed);
+    std::vector<Hit> expected(rays.size());
+    for (std::size_t i = 0; i < rays.size(); ++i) expected[i] = expected_accel.intersect(rays[i]);
+    std::ostringstream expected_text;
+    write_hits(expected_text, expected);
+    std::vector<std::string> expected_lines;
+    {
+        std::istringstream in(expected_text.str());
+        for (std::string line; std::getline(in, line);) expected_lines.push_back(line);
+    }
+    EXPECT_EQ(trace_with_cli(scene_path, rays_path, "0.5", dir + "/trace_time_hits.txt"),
+              expected_lines);
+    // The pose matters: at time 0 the joint has not turned, so some answer differs.
+    EXPECT_NE(trace_with_cli(scene_path, rays_path, "0", dir + "/trace_time_hits_0.txt"),
+              expected_lines);
+}
+
+std::string read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    return bytes.str();
+}
+
+/// Renders the two-joint skin file with a fixed camera; returns the exit status.
+int render_with_cli(const std::string& scene_path, const std::string& extra,
+                    const std::string& image_path) {
+    std::string command = shell_quote(REBRAID_CLI);
+    command += " render ";
+    command += shell_quote(scene_path);
+    command += " --mode normals --width 48 --height 32 --look-from 1,0.5,4 --look-at 1,0.5,0 ";
+    command += extra;
+    command += " -o ";
+    command += shell_quote(image_path);
+    command += " >/dev/null 2>&1";
+    const int status = std::system(command.c_str());
+    return (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(RenderCommand, TimeRendersThePoseTheAnimationReachesAtThatTime) {
+    const std::string scene_path = test::write_two_joint_skin_file("render_time_skin.glb", {});
+    const std::string dir = REBRAID_TEST_TMP;
+    ASSERT_EQ(render_with_cli(scene_path, "--time 0.5", dir + "/render_time_half.png"), 0);
+    ASSERT_EQ(render_with_cli(scene_path, "--time 0", dir + "/render_time_zero.png"), 0);
+    // Frame 1 of an animation stepping 0.5 s is the same pose, posed by the frame loop.
+    ASSERT_EQ(
+        render_with_cli(scene_path, "--frames 2 --time-step 0.5", dir + "/render_time_frames.png"),
+        0);
+    const std::string half = read_bytes(dir + "/render_time_half.png");
+    ASSERT_FALSE(half.empty());
+    EXPECT_EQ(half, read_bytes(dir + "/render_time_frames_0001.png"));
+    EXPECT_NE(half, read_bytes(dir + "/render_time_zero.png"));
+}
+
+}  // namespace
+}  // namespace rebraid

@@ -1,0 +1,77 @@
+// World-space boxes of BRefs (rebraid/rebraiding/bref_bounds.h): both rules bound every triangle
+// below the node; the children rule is never looser than the paper's transformed box.
+#include "rebraid/rebraiding/bref_bounds.h"
+#include "rebraid/bvh/object_bvh_builder.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/generators/mesh_generators.h"
+
+namespace rebraid {
+namespace {
+
+/// Every node reference of `bvh` below (and including) `ref`, with its object-space box.
+void collect(const ObjectBvh& bvh, NodeRef ref, const BBox3f& box,
+             std::vector<std::pair<NodeRef, BBox3f>>& out) {
+    out.push_back({ref, box});
+    if (!ref.is_inner()) return;
+    const WideNode& node = bvh.nodes[ref.node_id()];
+    for (int c = 0; c < kBvhWidth && !node.children[c].is_empty(); ++c)
+        collect(bvh, node.children[c], node.child_bounds(c), out);
+}
+
+/// World-space box of every triangle corner reachable from `ref`.
+BBox3f exact_world_bounds(const ObjectBvh& bvh, NodeRef ref, const AffineTransform& to_world) {
+    BBox3f box;
+    if (ref.is_leaf()) {
+        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i)
+            for (const Vec3f& v : {bvh.triangles[i].v0, bvh.triangles[i].v1, bvh.triangles[i].v2})
+                box.extend(to_world.transform_point(v));
+        return box;
+    }
+    const WideNode& node = bvh.nodes[ref.node_id()];
+    for (int c = 0; c < kBvhWidth && !node.children[c].is_empty(); ++c)
+        box.extend(exact_world_bounds(bvh, node.children[c], to_world));
+    return box;
+}
+
+TEST(BRefBounds, BothRulesBoundTheTrianglesAndChildrenIsTighter) {
+    const ObjectBvh bvh = build_object_bvh(make_torus_knot());
+    const AffineTransform to_world = AffineTransform::translate({5, -2, 1}) *
+                                     AffineTransform::rotate(normalize(Vec3f{1, 2, 3}), 0.7f) *
+                                     AffineTransform::scale({3, 0.5f, 1});
+    std::vector<std::pair<NodeRef, BBox3f>> nodes;
+    collect(bvh, bvh.root, bvh.bounds, nodes);
+    ASSERT_GT(nodes.size(), 20u);
+    float box_area = 0, children_area = 0;
+    for (const auto& [ref, box] : nodes) {
+        const BBox3f exact = exact_world_bounds(bvh, ref, to_world);
+        const BBox3f paper =
+            bref_world_bounds(bvh, ref, box, to_world, BRefBoundsRule::transformed_box);
+        const BBox3f tight =
+            bref_world_bounds(bvh, ref, box, to_world, BRefBoundsRule::transformed_children);
+        // Contains the exact box, allowing the rounding of the transformed box itself.
+        const Vec3f slack = exact.extent() * 1e-5f + Vec3f{1e-5f, 1e-5f, 1e-5f};
+        EXPECT_TRUE(merge(paper, {exact.min + slack, exact.max - slack}) == paper);
+        EXPECT_TRUE(merge(tight, {exact.min + slack, exact.max - slack}) == tight);
+        // Never looser than the paper's box (beyond the leaves' few-ulp padding).
+        EXPECT_LE(tight.half_area(), paper.half_area() * (1 + 1e-5f));
+        box_area += paper.half_area();
+        children_area += tight.half_area();
+    }
+    EXPECT_LT(children_area, 0.9f * box_area);  // rotation: a real gain, not a tie
+}
+
+TEST(BRefBounds, IdentityTransformGivesTheNodeBox) {
+    const ObjectBvh bvh = build_object_bvh(make_torus());
+    for (BRefBoundsRule rule :
+         {BRefBoundsRule::transformed_box, BRefBoundsRule::transformed_children})
+        EXPECT_EQ(bref_world_bounds(bvh, bvh.root, bvh.bounds, AffineTransform::identity(), rule),
+                  bvh.bounds);
+}
+
+}  // namespace
+}  // namespace rebraid

@@ -1,0 +1,98 @@
+// The project's structures against Embree's flat scene on the same rays: closest-hit
+// distance, instance and primitive ids, and occlusion, on shared, default and generated
+// scenes.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+
+#include "embree_glue/reference/embree_reference.h"
+#include "rebraid/generators/default_scene.h"
+#include "rebraid/generators/random_rays.h"
+#include "rebraid/generators/world_space_objects.h"
+#include "rebraid/io/gltf_scene.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/rebraiding/rebraid_builder.h"
+#include "rebraid/top_level/flat_accel.h"
+#include "rebraid/top_level/instanced_accel.h"
+#include "support/hit_comparison.h"
+#include "support/test_scenes.h"
+
+namespace rebraid {
+namespace {
+
+using AccelMaker = std::function<std::unique_ptr<Accel>(const Scene&)>;
+
+struct NamedAccel {
+    std::string name;
+    AccelMaker make;
+};
+
+std::vector<NamedAccel> project_accels() {
+    return {
+        {"flat", [](const Scene& s) { return std::make_unique<FlatAccel>(s); }},
+        {"twolevel",
+         [](const Scene& s) { return std::make_unique<InstancedAccel>(build_two_level_accel(s)); }},
+        {"rebraid",
+         [](const Scene& s) { return std::make_unique<InstancedAccel>(build_rebraid_accel(s)); }},
+    };
+}
+
+void expect_matches_embree_flat(const Scene& scene, const std::string& scene_name) {
+    const glue::EmbreeFlatAccel reference(scene);
+    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 10000, 42);
+    const test::AccelAnswers expected = test::trace_all(reference, rays);
+    for (const NamedAccel& named : project_accels()) {
+        SCOPED_TRACE(scene_name + " / " + named.name);
+        const std::unique_ptr<Accel> accel = named.make(scene);
+        test::expect_same_answers(expected, test::trace_all(*accel, rays),
+                                  test::tolerance_for(scene.bounds()));
+    }
+}
+
+TEST(AccelEquivalence, DefaultSceneMatchesEmbreeFlat) {
+    expect_matches_embree_flat(make_default_scene(), "default");
+}
+
+TEST(AccelEquivalence, GeneratedScenesMatchEmbreeFlat) {
+    for (const test::NamedScene& named : test::generated_scenes())
+        expect_matches_embree_flat(named.scene, named.name);
+}
+
+// Instances placed by the identity are entered with the world ray itself, the others with a
+// mapped ray (instanced_accel.cpp): both kinds side by side, and objects all in world space.
+TEST(AccelEquivalence, IdentityAndTransformedInstancesTogetherMatchEmbreeFlat) {
+    Scene mixed = test::make_overlap_scene(24, 5);
+    for (std::size_t i = 0; i < mixed.instances.size(); i += 3)
+        mixed.instances[i].object_to_world = AffineTransform::identity();
+    expect_matches_embree_flat(mixed, "every third instance at the identity");
+    expect_matches_embree_flat(bake_instances_into_world_space(test::make_overlap_scene(24, 5)),
+                               "objects in world space");
+}
+
+class SharedSceneEquivalence : public testing::TestWithParam<std::string> {};
+
+TEST_P(SharedSceneEquivalence, MatchesEmbreeFlat) {
+    const std::string path = std::string(REBRAID_SHARED_SCENES) + "/" + GetParam();
+    expect_matches_embree_flat(load_gltf_scene(path), GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedScenes, SharedSceneEquivalence,
+                         testing::ValuesIn(test::shared_scene_files()),
+                         [](const testing::TestParamInfo<std::string>& info) {
+                             return test::test_name_of(info.param);
+                         });
+
+}  // namespace
+}  // namespace rebraid
+
+namespace rebraid {
+namespace {
+
+TEST(AccelEquivalence, SharedSceneFolderHoldsTheManifestScenes) {
+    EXPECT_GE(test::shared_scene_files().size(), 9u) << "missing " << REBRAID_SHARED_SCENES;
+}
+
+}  // namespace
+}  // namespace rebraid

@@ -1,0 +1,72 @@
+// Structural guarantees of the flat and two-level structures: every triangle reachable
+// exactly once, and the same structure on any thread count.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <functional>
+
+#include "rebraid/generators/default_scene.h"
+#include "rebraid/io/gltf_scene.h"
+#include "rebraid/top_level/flat_accel.h"
+#include "rebraid/top_level/instanced_accel.h"
+#include "support/hit_comparison.h"
+#include "support/reachability.h"
+#include "support/test_scenes.h"
+
+namespace rebraid {
+namespace {
+
+std::vector<test::NamedScene> all_scenes() {
+    std::vector<test::NamedScene> scenes = test::generated_scenes();
+    scenes.push_back({"default", make_default_scene()});
+    for (const std::string& file : test::shared_scene_files())
+        scenes.push_back({file, load_gltf_scene(std::string(REBRAID_SHARED_SCENES) + "/" + file)});
+    return scenes;
+}
+
+TEST(FlatAccel, EveryTriangleReachableOnce) {
+    for (const test::NamedScene& named : all_scenes()) {
+        SCOPED_TRACE(named.name);
+        test::expect_each_reached_once(test::reach_counts(named.scene, FlatAccel(named.scene)));
+    }
+}
+
+TEST(TwoLevelAccel, EveryTriangleReachableOnce) {
+    for (const test::NamedScene& named : all_scenes()) {
+        SCOPED_TRACE(named.name);
+        test::expect_each_reached_once(
+            test::reach_counts(named.scene, build_two_level_accel(named.scene)));
+    }
+}
+
+std::uint64_t hash_on(int threads, const std::function<std::uint64_t()>& build) {
+    std::uint64_t hash = 0;
+    tbb::task_arena arena(threads);
+    arena.execute([&] { hash = build(); });
+    return hash;
+}
+
+TEST(FlatAndTwoLevel, SameStructureOnOneTwoAndEightThreads) {
+    tbb::global_control allow_eight(tbb::global_control::max_allowed_parallelism, 8);
+    // A small threshold makes the parallel binning, partitioning and subtree paths run.
+    const BuildSettings settings{.parallel_threshold = 256};
+    for (const test::NamedScene& named : all_scenes()) {
+        SCOPED_TRACE(named.name);
+        auto flat = [&] { return *FlatAccel(named.scene, settings).stats().structure_hash; };
+        auto two_level = [&] {
+            return *build_two_level_accel(named.scene, own_object_bvh_builder(settings))
+                        .stats()
+                        .structure_hash;
+        };
+        for (const auto& build :
+             {std::function<std::uint64_t()>(flat), std::function<std::uint64_t()>(two_level)}) {
+            const std::uint64_t one = hash_on(1, build);
+            EXPECT_EQ(one, hash_on(2, build));
+            EXPECT_EQ(one, hash_on(8, build));
+        }
+    }
+}
+
+}  // namespace
+}  // namespace rebraid
