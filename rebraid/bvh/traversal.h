@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "rebraid/bvh/node_box_test.h"
+#include "rebraid/bvh/traversal_ray.h"
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/accel.h"
 #include "rebraid/core/ray.h"
@@ -12,132 +14,6 @@
 
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
-
-/// Byte offset inside a WideNode of the plane array of `axis` a ray enters boxes through
-/// (`is_far` false) or leaves them through (true), for a direction of sign `is_negative`
-/// along that axis: the lower planes first for a positive direction, the upper ones for a
-/// negative one.
-constexpr std::uint32_t slab_plane_offset(int axis, bool is_negative, bool is_far) {
-    // WideNode stores each axis's lower plane array followed by its upper one.
-    static_assert(offsetof(WideNode, upper_x) == offsetof(WideNode, lower_x) + 32 &&
-                  offsetof(WideNode, lower_y) == offsetof(WideNode, lower_x) + 64 &&
-                  offsetof(WideNode, upper_y) == offsetof(WideNode, lower_x) + 96 &&
-                  offsetof(WideNode, lower_z) == offsetof(WideNode, lower_x) + 128 &&
-                  offsetof(WideNode, upper_z) == offsetof(WideNode, lower_x) + 160);
-    const bool is_upper = is_negative != is_far;
-    return std::uint32_t(offsetof(WideNode, lower_x)) + 64u * std::uint32_t(axis) +
-           32u * std::uint32_t(is_upper);
-}
-
-/// A ray prepared for box tests: reciprocal direction with zero components replaced by tiny
-/// ones (so no 0 * inf appears) and, per axis, the byte offsets inside a WideNode of the
-/// plane arrays the ray enters (near) and leaves (far) a box through.
-struct TraversalRay {
-    Vec3f org;
-    Vec3f dir;
-    Vec3f rdir;
-    float tnear = 0.0f;
-    float tfar = 0.0f;
-    std::uint32_t near_offset[3] = {};
-    std::uint32_t far_offset[3] = {};
-
-    TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far)
-        : org(origin), dir(direction), tnear(t_near), tfar(t_far) {
-        for (int a = 0; a < 3; ++a) {
-            const float d = direction[a];
-            const float safe = std::fabs(d) < 1e-18f ? std::copysign(1e-18f, d) : d;
-            rdir[a] = 1.0f / safe;
-            const bool is_negative = !(rdir[a] >= 0.0f);
-            near_offset[a] = slab_plane_offset(a, is_negative, false);
-            far_offset[a] = slab_plane_offset(a, is_negative, true);
-        }
-    }
-};
-
-/// The far distance of a slab test is scaled up by 1 + 2*gamma(3) (Ize 2013) so rounding can
-/// never reject a box the ray touches.
-inline constexpr float kRobustBoxScale = 1.0f + 4.0f * 5.96046448e-08f;
-
-#ifdef REBRAID_SIMD_AVX2
-/// The per-ray values of the box test, broadcast once per traversal rather than per node.
-struct NodeTestRay {
-    __m256 org[3];
-    __m256 rdir[3];
-    std::uint32_t near_offset[3];
-    std::uint32_t far_offset[3];
-
-    explicit NodeTestRay(const TraversalRay& ray) {
-        for (int a = 0; a < 3; ++a) {
-            org[a] = _mm256_set1_ps(ray.org[a]);
-            rdir[a] = _mm256_set1_ps(ray.rdir[a]);
-            // Derived again rather than copied from ray.near_offset/far_offset: the ray was
-            // usually written just before, element by element, and the compiler reads those
-            // arrays back with wider loads, which cannot be forwarded from the narrower
-            // stores (a stall measured at every traversal start).
-            const bool is_negative = !(ray.rdir[a] >= 0.0f);
-            near_offset[a] = slab_plane_offset(a, is_negative, false);
-            far_offset[a] = slab_plane_offset(a, is_negative, true);
-        }
-    }
-};
-
-/// Entry distances of all children (as a vector) and the mask of those the ray enters within
-/// [tnear, tfar]. (plane - org) * rdir rather than a fused multiply-add: the product of a
-/// far-away origin and rdir would cost the precision the robust bound relies on.
-inline unsigned intersect_node_simd(const WideNode& node, const NodeTestRay& ray, float tnear,
-                                    float tfar, __m256& entry) {
-    const char* base = reinterpret_cast<const char*>(&node);
-    const auto plane = [&](std::uint32_t offset) {
-        return _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
-    };
-    const __m256 near_x =
-        _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[0]), ray.org[0]), ray.rdir[0]);
-    const __m256 near_y =
-        _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[1]), ray.org[1]), ray.rdir[1]);
-    const __m256 near_z =
-        _mm256_mul_ps(_mm256_sub_ps(plane(ray.near_offset[2]), ray.org[2]), ray.rdir[2]);
-    const __m256 far_x =
-        _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[0]), ray.org[0]), ray.rdir[0]);
-    const __m256 far_y =
-        _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[1]), ray.org[1]), ray.rdir[1]);
-    const __m256 far_z =
-        _mm256_mul_ps(_mm256_sub_ps(plane(ray.far_offset[2]), ray.org[2]), ray.rdir[2]);
-    entry =
-        _mm256_max_ps(_mm256_max_ps(near_x, near_y), _mm256_max_ps(near_z, _mm256_set1_ps(tnear)));
-    const __m256 exit =
-        _mm256_min_ps(_mm256_min_ps(far_x, far_y), _mm256_min_ps(far_z, _mm256_set1_ps(tfar)));
-    const __m256 robust_exit = _mm256_mul_ps(exit, _mm256_set1_ps(kRobustBoxScale));
-    return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(entry, robust_exit, _CMP_LE_OQ)));
-}
-#endif
-
-/// Distances to the children's boxes a ray enters before `tfar`; bit i of the result is set
-/// when child i is hit, with its entry distance in `distances[i]`.
-inline unsigned intersect_node(const WideNode& node, const TraversalRay& ray,
-                               float distances[kBvhWidth]) {
-#ifdef REBRAID_SIMD_AVX2
-    __m256 entry;
-    const unsigned mask = intersect_node_simd(node, NodeTestRay(ray), ray.tnear, ray.tfar, entry);
-    _mm256_storeu_ps(distances, entry);
-    return mask;
-#else
-    const char* base = reinterpret_cast<const char*>(&node);
-    const auto plane = [&](std::uint32_t offset, int slot) {
-        return reinterpret_cast<const float*>(base + offset)[slot];
-    };
-    unsigned mask = 0;
-    for (int i = 0; i < kBvhWidth; ++i) {
-        float t_enter = ray.tnear, t_exit = ray.tfar;
-        for (int a = 0; a < 3; ++a) {
-            t_enter = std::fmax(t_enter, (plane(ray.near_offset[a], i) - ray.org[a]) * ray.rdir[a]);
-            t_exit = std::fmin(t_exit, (plane(ray.far_offset[a], i) - ray.org[a]) * ray.rdir[a]);
-        }
-        distances[i] = t_enter;
-        if (t_enter <= t_exit * kRobustBoxScale) mask |= 1u << i;
-    }
-    return mask;
-#endif
-}
 
 /// How traverse_bvh orders the children a ray enters.
 enum class TraversalOrder {
@@ -148,20 +24,6 @@ enum class TraversalOrder {
     /// traversal and ordering costs more than it saves.
     any,
 };
-
-/// Bit i set when child i of `node` is a leaf reference.
-inline unsigned leaf_slots(const WideNode& node) {
-#ifdef REBRAID_SIMD_AVX2
-    // The leaf flag is each reference's top bit, i.e. the sign bit of the 8 lanes.
-    static_assert(offsetof(WideNode, children) % 32 == 0 && NodeRef::kLeafBit == 0x80000000u);
-    return unsigned(
-        _mm256_movemask_ps(_mm256_load_ps(reinterpret_cast<const float*>(node.children))));
-#else
-    unsigned slots = 0;
-    for (int i = 0; i < kBvhWidth; ++i) slots |= unsigned(node.children[i].is_leaf()) << i;
-    return slots;
-#endif
-}
 
 /// How traverse_bvh hands leaves to its visitor.
 enum class LeafVisits {
@@ -229,9 +91,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
             prefetch_node(nodes, ref);
         return (std::uint64_t(std::bit_cast<std::uint32_t>(distance)) << 32) | ref.bits();
     };
-#ifdef REBRAID_SIMD_AVX2
-    const NodeTestRay node_ray(ray);
-#endif
+    const NodeBoxTest box_test(ray);
     NodeRef current = start;
     for (;;) {
         while (current.is_inner()) {
@@ -241,28 +101,14 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
             __builtin_prefetch(node.children);
             if (counters) ++counters->nodes_visited;
             alignas(32) float distances[kBvhWidth];
-#ifdef REBRAID_SIMD_AVX2
-            __m256 entry;
-            unsigned mask = intersect_node_simd(node, node_ray, ray.tnear, ray.tfar, entry);
-            _mm256_store_ps(distances, entry);
-#else
-            unsigned mask = intersect_node(node, ray, distances);
-#endif
+            unsigned mask = box_test(node, ray.tnear, ray.tfar, distances);
             if constexpr (kWithSiblings) {
                 const unsigned leaf_mask = mask & leaf_slots(node);
                 if (leaf_mask != 0) {
                     if (visit_leaf(node.children, leaf_mask)) return true;
-                        // Their hits shortened the ray: keep the inner children still entered
-                        // before its end (the test a stacked child gets when popped).
-#ifdef REBRAID_SIMD_AVX2
-                    const unsigned entered = unsigned(_mm256_movemask_ps(
-                        _mm256_cmp_ps(entry, _mm256_set1_ps(ray.tfar), _CMP_LE_OQ)));
-#else
-                    unsigned entered = 0;
-                    for (int i = 0; i < kBvhWidth; ++i)
-                        entered |= unsigned(distances[i] <= ray.tfar) << i;
-#endif
-                    mask &= ~leaf_mask & entered;
+                    // Their hits shortened the ray: keep the inner children still entered
+                    // before its end (the test a stacked child gets when popped).
+                    mask &= ~leaf_mask & entered_before(distances, ray.tfar);
                 }
             }
             if (mask == 0) {

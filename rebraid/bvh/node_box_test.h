@@ -1,0 +1,130 @@
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+
+#include "rebraid/bvh/traversal_ray.h"
+#include "rebraid/bvh/wide_node.h"
+#include "rebraid/core/simd_config.h"
+
+namespace rebraid {
+inline namespace REBRAID_SIMD_NAMESPACE {
+
+// The box-test kernels of traverse_bvh. Each comes in the SIMD level the library is compiled
+// for (simd_config.h) and a portable form with the same results; the traversal loop itself
+// never names an ISA.
+
+/// The far distance of a slab test is scaled up by 1 + 2*gamma(3) (Ize 2013) so rounding can
+/// never reject a box the ray touches.
+inline constexpr float kRobustBoxScale = 1.0f + 4.0f * 5.96046448e-08f;
+
+#ifdef REBRAID_SIMD_AVX2
+
+/// The box test of one ray against the 8 children of a node: the per-ray values broadcast
+/// once per traversal rather than per node.
+class NodeBoxTest {
+public:
+    explicit NodeBoxTest(const TraversalRay& ray) {
+        for (int a = 0; a < 3; ++a) {
+            org_[a] = _mm256_set1_ps(ray.org[a]);
+            rdir_[a] = _mm256_set1_ps(ray.rdir[a]);
+            // Derived again rather than copied from ray.near_offset/far_offset: the ray was
+            // usually written just before, element by element, and the compiler reads those
+            // arrays back with wider loads, which cannot be forwarded from the narrower
+            // stores (a stall measured at every traversal start).
+            const bool is_negative = !(ray.rdir[a] >= 0.0f);
+            near_offset_[a] = slab_plane_offset(a, is_negative, false);
+            far_offset_[a] = slab_plane_offset(a, is_negative, true);
+        }
+    }
+
+    /// Mask of the children the ray enters within [tnear, tfar], with every child's entry
+    /// distance in `distances` (32-byte aligned). (plane - org) * rdir rather than a fused
+    /// multiply-add: the product of a far-away origin and rdir would cost the precision the
+    /// robust bound relies on.
+    unsigned operator()(const WideNode& node, float tnear, float tfar, float* distances) const {
+        const char* base = reinterpret_cast<const char*>(&node);
+        const auto slab = [&](std::uint32_t offset, int axis) {
+            const __m256 plane = _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
+            return _mm256_mul_ps(_mm256_sub_ps(plane, org_[axis]), rdir_[axis]);
+        };
+        const __m256 near_x = slab(near_offset_[0], 0), far_x = slab(far_offset_[0], 0);
+        const __m256 near_y = slab(near_offset_[1], 1), far_y = slab(far_offset_[1], 1);
+        const __m256 near_z = slab(near_offset_[2], 2), far_z = slab(far_offset_[2], 2);
+        const __m256 entry = _mm256_max_ps(_mm256_max_ps(near_x, near_y),
+                                           _mm256_max_ps(near_z, _mm256_set1_ps(tnear)));
+        const __m256 exit =
+            _mm256_min_ps(_mm256_min_ps(far_x, far_y), _mm256_min_ps(far_z, _mm256_set1_ps(tfar)));
+        const __m256 robust_exit = _mm256_mul_ps(exit, _mm256_set1_ps(kRobustBoxScale));
+        _mm256_store_ps(distances, entry);
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(entry, robust_exit, _CMP_LE_OQ)));
+    }
+
+private:
+    __m256 org_[3];
+    __m256 rdir_[3];
+    std::uint32_t near_offset_[3];
+    std::uint32_t far_offset_[3];
+};
+
+/// Bit i set when distances[i] (32-byte aligned, as NodeBoxTest wrote them) is at most
+/// `tfar`: the children still entered before the end of a ray that hits have shortened.
+inline unsigned entered_before(const float* distances, float tfar) {
+    return unsigned(_mm256_movemask_ps(
+        _mm256_cmp_ps(_mm256_load_ps(distances), _mm256_set1_ps(tfar), _CMP_LE_OQ)));
+}
+
+/// Bit i set when child i of `node` is a leaf reference.
+inline unsigned leaf_slots(const WideNode& node) {
+    // The leaf flag is each reference's top bit, i.e. the sign bit of the 8 lanes.
+    static_assert(offsetof(WideNode, children) % 32 == 0 && NodeRef::kLeafBit == 0x80000000u);
+    return unsigned(
+        _mm256_movemask_ps(_mm256_load_ps(reinterpret_cast<const float*>(node.children))));
+}
+
+#else  // portable: one child after the other, the same arithmetic
+
+class NodeBoxTest {
+public:
+    explicit NodeBoxTest(const TraversalRay& ray) : ray_(ray) {}
+
+    unsigned operator()(const WideNode& node, float tnear, float tfar, float* distances) const {
+        const char* base = reinterpret_cast<const char*>(&node);
+        const auto plane = [&](std::uint32_t offset, int slot) {
+            return reinterpret_cast<const float*>(base + offset)[slot];
+        };
+        unsigned mask = 0;
+        for (int i = 0; i < kBvhWidth; ++i) {
+            float t_enter = tnear, t_exit = tfar;
+            for (int a = 0; a < 3; ++a) {
+                t_enter = std::fmax(t_enter,
+                                    (plane(ray_.near_offset[a], i) - ray_.org[a]) * ray_.rdir[a]);
+                t_exit =
+                    std::fmin(t_exit, (plane(ray_.far_offset[a], i) - ray_.org[a]) * ray_.rdir[a]);
+            }
+            distances[i] = t_enter;
+            if (t_enter <= t_exit * kRobustBoxScale) mask |= 1u << i;
+        }
+        return mask;
+    }
+
+private:
+    const TraversalRay& ray_;
+};
+
+inline unsigned entered_before(const float* distances, float tfar) {
+    unsigned entered = 0;
+    for (int i = 0; i < kBvhWidth; ++i) entered |= unsigned(distances[i] <= tfar) << i;
+    return entered;
+}
+
+inline unsigned leaf_slots(const WideNode& node) {
+    unsigned slots = 0;
+    for (int i = 0; i < kBvhWidth; ++i) slots |= unsigned(node.children[i].is_leaf()) << i;
+    return slots;
+}
+
+#endif
+
+}  // namespace REBRAID_SIMD_NAMESPACE
+}  // namespace rebraid
