@@ -9,6 +9,9 @@ them into bench/RESULTS.md).
 
 Suites (every command runs from the repository root):
 
+  structures `rebraid stats SCENE --accel A --json` for flat, twolevel and rebraid on the
+             default scene and every shared scene: SAH and structure_hash (deterministic, so
+             one round whatever --rounds says)
   scenes     `rebraid bench SCENE --json` for the built-in default scene and every
              ../shared/scenes/*.glb, with the default structures (embree-flat,
              embree-instanced, flat, twolevel, rebraid) and the paper's rules
@@ -25,10 +28,13 @@ command's result is one JSON file, SUITE/NAME.rROUND.json, holding the command (
 relative to the repository root), the commit, the machine, the date, the round and the parsed
 output. Collecting a suite first deletes that suite's earlier files in the output folder.
 
-Time on a 2-core machine (AMD EPYC, 24 GiB), idle: one round takes about 2.5 min for
-`scenes`, 2 min for `generated` and 1.5 min for `animate`, so the full default collection
-(all suites, 5 rounds) takes about 30 minutes. Run it on an otherwise idle machine: the
-builds and the rays use every core.
+Expected time on a 2-core machine (AMD EPYC, 24 GiB), from a --quick run (about 1.5 minutes),
+one full round of the default scene (15 s) and 2-frame animate runs, all while a compile job
+held about one core: one round takes about 1 min for `scenes`, 2 min for `generated` (mostly
+trees and powerplant) and 3 min for `animate` (20 frames of 640x360 primary and diffuse rays
+for 15 methods, 4 runs), so the full default collection (all suites, 5 rounds) takes about
+30 minutes, and less on an idle machine. Run it on an otherwise idle
+machine: the builds and the rays use every core.
 """
 import argparse
 import datetime
@@ -45,7 +51,9 @@ from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENE
                         commit_info, load_average, machine_info, relative_to_repo, repo_path,
                         run, run_json, scene_name)
 
-SUITES = ["scenes", "generated", "animate"]
+SUITES = ["structures", "scenes", "generated", "animate"]
+# The structures whose SAH and structure_hash the `structures` suite records.
+STRUCTURE_ACCELS = ["flat", "twolevel", "rebraid"]
 GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
 ANIMATE_STATIC = f"{SHARED_SCENES}/cg57_cruiser.glb"
 # Used when the MANIFEST cannot be read: the shared scenes it lists with an animation.
@@ -53,8 +61,9 @@ ANIMATED_FALLBACK = ["brainstem", "motion_capture_rom", "animated_morph_cube"]
 # Stands for the temporary folder of the generated scenes in recorded commands.
 TMP = "TMP"
 
-# Ray counts and repetitions: a full collection (all suites, 5 rounds) fits in ~30 minutes on
-# 2 cores; --quick only checks that the pipeline runs.
+# Ray counts (230400 = a 640x360 image; as many diffuse rays), timed repetitions per process
+# and animation frames: a full collection (all suites, 5 rounds) takes ~30 minutes on 2 cores.
+# --quick only checks that the pipeline runs.
 FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": []}
 QUICK = {"rays": 2000, "repetitions": 1, "frames": 2, "animate": ["--width", "64", "--height", "36"]}
 
@@ -76,7 +85,7 @@ def animated_shared_scenes():
     header = None
     for line in lines:
         if not line.startswith("|"):
-            header = None if not line.strip() else header
+            header = None
             continue
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
         if header is None:
@@ -110,6 +119,14 @@ def animate_command(static, dynamic, settings, threads):
 
 def jobs_of(suite, settings, threads):
     """The suite's (name, argv, setup argvs) triples; argv may name files under TMP/."""
+    if suite == "structures":
+        jobs = []
+        for scene in ["default"] + shared_scenes():
+            for accel in STRUCTURE_ACCELS:
+                argv = [BINARY, "stats", scene, "--accel", accel, "--json"]
+                argv += ["--threads", str(threads)] if threads is not None else []
+                jobs.append((f"{scene_name(scene)}-{accel}", argv, []))
+        return jobs
     if suite == "scenes":
         return [(scene_name(s), bench_command(s, settings, threads), [])
                 for s in ["default"] + shared_scenes()]
@@ -208,7 +225,9 @@ def main():
             for _, _, setup in jobs:
                 for argv in setup:
                     run(substitute(argv, tmp))
-            for round_index in range(1, rounds + 1):
+            # Structures are deterministic: one round says all.
+            suite_rounds = 1 if suite == "structures" else rounds
+            for round_index in range(1, suite_rounds + 1):
                 for order, (name, argv, setup) in enumerate(jobs):
                     load = load_average()
                     date = utc_now()

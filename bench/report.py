@@ -17,7 +17,7 @@ import sys
 
 from results_io import DEFAULT_ACCELS, PAPER, RESULTS_DIR, load_results, median, repo_path
 
-SUITE_ORDER = {"scenes": 0, "generated": 1, "animate": 2}
+SUITE_ORDER = {"structures": 0, "scenes": 1, "generated": 2, "animate": 3}
 # Short column names of the structures; any other variant keeps its full name.
 LABELS = {PAPER: "paper"}
 PROJECT = ["flat", "twolevel", "rebraid", PAPER]
@@ -34,7 +34,7 @@ def fmt_ms(value):
     """Milliseconds with precision by magnitude."""
     if value is None:
         return DASH
-    return f"{value:.0f}" if value >= 100 else f"{value:.1f}" if value >= 10 else f"{value:.2f}"
+    return fmt_sig(value)
 
 
 def fmt_sig(value):
@@ -52,7 +52,9 @@ def fmt_int(value):
 
 
 def fmt_ratio(value):
-    return DASH if value is None else f"{value:.2f}"
+    if value is None:
+        return DASH
+    return f"{value:.0f}" if value >= 100 else f"{value:.1f}" if value >= 10 else f"{value:.2f}"
 
 
 def table(header, rows, left=1):
@@ -202,7 +204,8 @@ def section_method(runs):
 - Structures: `embree-flat` and `embree-instanced` are Embree's BVHs over all triangles and
   over instances; `flat` is the project's BVH over all triangles; `twolevel` its BVH over
   instances (one BRef per instance); `rebraid` the partially re-braided top level with the
-  project's default rules; `paper` is `{PAPER}`, the paper's rules (extent opening,
+  project's default rules (SAH-tested opening, BRef boxes from transformed vertices); `paper`
+  is the variant `{PAPER}`: the paper's rules (extent opening,
   transformed node boxes).
 - A "{DASH}" marks a figure the structure or the command does not report.
 """
@@ -217,37 +220,72 @@ def section_commands(runs):
             suites.append(run.suite)
     for suite in suites:
         members = [run for run in runs if run.suite == suite]
-        lines = []
-        collect = members[0].results[0].get("collect_command")
-        if collect:
-            lines.append("# " + code(collect))
+        setup, lines = [], []
         for run in members:
-            for setup in run.results[0].get("setup", []):
-                if code(setup) not in lines:
-                    lines.append(code(setup))
-        for run in members:
-            line = code(run.command)
-            if line not in lines:
-                lines.append(line)
+            setup += [code(a) for a in run.results[0].get("setup", []) if code(a) not in setup]
+            if code(run.command) not in lines:
+                lines.append(code(run.command))
         per_round = {}
         for run in members:
             for r in run.results:
                 if r.get("seconds") is not None:
                     per_round[r.get("round", 0)] = per_round.get(r.get("round", 0), 0) + r["seconds"]
-        took = (f" one round took {median(per_round.values()) / 60:.1f} min."
-                if per_round else "")
-        out.append(f"Suite `{suite}`:{took}\n\n```sh\n" + "\n".join(lines) + "\n```\n")
+        collect = members[0].results[0].get("collect_command")
+        intro = f"Suite `{suite}`"
+        if collect:
+            intro += f", `{code(collect)}`"
+        if per_round:
+            intro += f" (one round took about {median(per_round.values()) / 60:.1f} min)"
+        if setup:
+            out.append(intro + ", runs once:\n\n```sh\n" + "\n".join(setup) + "\n```\n")
+            intro = "and then, in each round:"
+        else:
+            intro += ", runs in each round:"
+        out.append(intro + "\n\n```sh\n" + "\n".join(lines) + "\n```\n")
     return "\n".join(out)
 
 
+def rows_with(run, key):
+    output = run.results[0]["output"]
+    return isinstance(output, list) and output and isinstance(output[0], dict) and key in output[0]
+
+
 def bench_runs(runs):
-    return [run for run in runs if run.results[0]["output"]
-            and isinstance(run.results[0]["output"][0], dict) and "accel" in run.results[0]["output"][0]]
+    return [run for run in runs if rows_with(run, "accel")]
 
 
 def animate_runs(runs):
-    return [run for run in runs if run.results[0]["output"]
-            and isinstance(run.results[0]["output"][0], dict) and "method" in run.results[0]["output"][0]]
+    return [run for run in runs if rows_with(run, "method")]
+
+
+def structure_runs(runs):
+    return [run for run in runs
+            if isinstance(run.results[0]["output"], dict) and "structure_hash" in run.results[0]["output"]]
+
+
+def section_structures(runs):
+    """SAH and structure_hash per scene and structure, from `rebraid stats` (exact figures:
+    a change that keeps behaviour keeps every one of them)."""
+    by_scene, accels = {}, []
+    for run in runs:
+        output = run.results[0]["output"]
+        scene, accel = run.name.rsplit("-", 1)[0], output["accel"]
+        by_scene.setdefault(scene, {})[accel] = output
+        accels += [accel] if accel not in accels else []
+    header = ["scene"]
+    for accel in accels:
+        header += [f"{label(accel)} SAH", f"{label(accel)} structure_hash"]
+    rows = []
+    for scene, outputs in by_scene.items():
+        row = [scene]
+        for accel in accels:
+            output = outputs.get(accel, {})
+            row += [fmt(output.get("sah"), 4), f"`{output['structure_hash']:016x}`"
+                    if output.get("structure_hash") is not None else "-"]
+        rows.append(row)
+    return ("## Structures: SAH and structure hash\n\n"
+            "Exact and deterministic (the same on any thread count): a change meant to keep\n"
+            "behaviour must leave every figure here as it is.\n\n" + table(header, rows))
 
 
 def section_scenes(runs):
@@ -413,8 +451,8 @@ def draw_plots(out_file, scene_runs, frame_runs):
         return {}
     stem = os.path.splitext(os.path.basename(out_file))[0]
     folder = os.path.dirname(os.path.abspath(out_file))
+    os.makedirs(folder, exist_ok=True)
     links = {}
-    plt.rcParams["svg.hashsalt"] = "rebraid"
     if scene_runs:
         pairs = [("flat", "embree-flat"), ("twolevel", "embree-flat"), (PAPER, "embree-flat"),
                  ("rebraid", "embree-flat")]
@@ -448,7 +486,15 @@ def draw_plots(out_file, scene_runs, frame_runs):
             left = [l + v for l, v in zip(left, values)]
         axis.set_yticks(range(len(methods)), methods)
         axis.invert_yaxis()
-        axis.set_xscale("log") if max(left) > 20 * sorted(left)[len(left) // 2] else None
+        # Linear scale; bars far beyond the others are cut at the edge and labelled.
+        typical = sorted(left)[len(left) // 2]
+        limit = max([t for t in left if t <= 4 * typical] + [typical]) * 1.25
+        if max(left) > limit:
+            axis.set_xlim(0, limit)
+            for y, total in enumerate(left):
+                if total > limit:
+                    axis.text(limit * 0.98, y, f"{total:.0f} ms", ha="right", va="center",
+                              fontsize="small", color="white", fontweight="bold")
         axis.set_xlabel("mean frame ms (median of rounds)")
         axis.set_title(f"Frame time: {run.name}")
         axis.grid(axis="x", alpha=0.3)
@@ -469,6 +515,7 @@ def report(results, generated_by, results_dir, plots_out=None):
     frame_runs = animate_runs(runs)
     accels = ordered_accels(scene_runs)
     links = draw_plots(plots_out, scene_runs, frame_runs) if plots_out else {}
+    structures = structure_runs(runs)
     parts = [
         "# Benchmark results\n",
         f"This file is generated by `{generated_by}` from the raw results in `{results_dir}/`\n"
@@ -478,6 +525,8 @@ def report(results, generated_by, results_dir, plots_out=None):
         section_method(runs),
         section_commands(runs),
     ]
+    if structures:
+        parts.append(section_structures(structures))
     if scene_runs:
         parts += [section_scenes(scene_runs), section_table1(scene_runs, accels)]
         if "scenes" in links:
@@ -524,6 +573,7 @@ def main():
     if args.plots:
         generated_by += " --plots"
     out_file = repo_path(args.out)
+    os.makedirs(os.path.dirname(out_file), exist_ok=True)
     text = report(results, generated_by, args.results.rstrip("/"), out_file if args.plots else None)
     with open(out_file, "w", newline="\n") as f:
         f.write(text)

@@ -1,4 +1,4 @@
-"""Helpers shared by the benchmark scripts of bench/: running `rebraid` from the repository
+"""Code shared by the benchmark scripts of bench/: running `rebraid` from the repository
 root, describing the machine and the commit, reading result files, medians.
 
 Python 3.11 standard library only.

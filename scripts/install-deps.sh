@@ -6,6 +6,7 @@ packages=(
     cmake ninja-build g++ pkg-config
     libembree-dev libtbb-dev libopenimageio-dev openimageio-tools libtinygltf-dev nlohmann-json3-dev
     libcli11-dev libgtest-dev libbenchmark-dev
+    python3 python3-matplotlib
 )
 missing=()
 for p in "${packages[@]}"; do

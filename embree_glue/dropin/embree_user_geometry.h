@@ -11,7 +11,7 @@ namespace rebraid {
 /// with `accel`. Tracing get() with rtcIntersect1/4/8/16 or rtcOccluded1/4/8/16 gives the
 /// answers of EmbreeAccel::intersect1/occluded1 (the hit's geomID, primID and instID are those
 /// of the original scene, not of the user geometry), at the cost of Embree's dispatch into
-/// the callback (see bench/RESULTS.md). The intersection context's filter and flags are not
+/// the callback (examples/dropin: dropin_example --bench). The intersection context's filter and flags are not
 /// used.
 ///
 /// `accel` must outlive this object. After accel.update(), call update() here too (the user

@@ -39,7 +39,7 @@ struct BuildSettings {
     bool fill_nodes = true;
     /// Children per node, 2..kBvhWidth. Nodes keep kBvhWidth slots and the traversal tests
     /// all of them at once, so fewer children only make the tree deeper: a setting for
-    /// measuring what the 8-wide layout buys (bench/RESULTS.md, "Node width").
+    /// measuring what the 8-wide layout buys (bench/bench_traversal.cpp's max_children).
     std::uint32_t max_children = kBvhWidth;
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.

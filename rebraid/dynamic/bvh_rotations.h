@@ -26,7 +26,7 @@ enum class RotationLeafMode {
 /// children grew 1 %. On bench_update's twist (131k triangles, 100 frames, 1 thread) that
 /// keeps the SAH within 1.144x of a per-frame rebuild at 1.6-1.7x the CPU time of a refit;
 /// Kopta's schedule (pre_split, one move, every node every pass) reaches 1.205x at 2.8x
-/// (bench/RESULTS.md, "Updating deforming objects").
+/// (./build/bench/bench_update).
 struct RotationSettings {
     /// See RotationLeafMode. split_merge works on the builder's default trees (up to 4
     /// triangles per leaf), which trace faster than one-triangle-per-leaf trees and start
