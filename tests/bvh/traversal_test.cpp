@@ -15,6 +15,7 @@
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instanced_accel.h"
 #include "support/hit_comparison.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -77,6 +78,43 @@ std::vector<std::pair<std::string, std::unique_ptr<Accel>>> project_accels(
     return accels;
 }
 
+TEST(Traversal, AxisParallelRaysAlongSharedEdgesOfAGridHit) {
+    // A floor of unit squares (two triangles each) and rays straight down through its grid
+    // lines and corners: each ray lies in the planes of the boxes of the squares it touches,
+    // with zero direction components there, so a box test computing (plane - origin) / 0
+    // gets 0 / 0 and loses the squares on both sides (a crack). Every ray must hit, at t 2.
+    Mesh floor;
+    constexpr int kSquares = 6;
+    for (int y = 0; y <= kSquares; ++y)
+        for (int x = 0; x <= kSquares; ++x) floor.positions.push_back({float(x), 0.0f, float(y)});
+    const auto corner = [](int x, int y) { return std::uint32_t(y * (kSquares + 1) + x); };
+    for (int y = 0; y < kSquares; ++y)
+        for (int x = 0; x < kSquares; ++x) {
+            floor.triangles.push_back({corner(x, y), corner(x + 1, y), corner(x + 1, y + 1)});
+            floor.triangles.push_back({corner(x, y), corner(x + 1, y + 1), corner(x, y + 1)});
+        }
+    Scene scene;
+    scene.meshes.push_back(floor);
+    scene.instances.push_back({0, AffineTransform::identity()});
+    scene.instances.push_back({0, AffineTransform::translate({0.0f, -1.0f, 0.0f})});
+    std::vector<Ray> rays;
+    for (int y = 1; y < 2 * kSquares; ++y)
+        for (int x = 1; x < 2 * kSquares; ++x)
+            if (x % 2 == 0 || y % 2 == 0)  // on a grid line (both even: on a corner)
+                rays.push_back(
+                    {{0.5f * float(x), 2.0f, 0.5f * float(y)}, 0.0f, {0.0f, -1.0f, 0.0f}});
+    for (const auto& [name, accel] : project_accels(scene)) {
+        SCOPED_TRACE(name);
+        std::size_t misses = 0;
+        for (const Ray& ray : rays) {
+            const Hit hit = accel->intersect(ray);
+            misses +=
+                !hit.is_hit() || hit.t != 2.0f || hit.instance_id != 0 || !accel->occluded(ray);
+        }
+        EXPECT_EQ(misses, 0u) << "of " << rays.size() << " rays along grid lines";
+    }
+}
+
 TEST(Traversal, ClosedMeshesHaveNoHolesAtVerticesAndEdges) {
     // From inside the sphere, every ray leaves through the surface: aiming at the vertices
     // and edge midpoints (where a non-watertight test leaks) must still hit, at t ~ 1.
@@ -126,13 +164,13 @@ TEST(Traversal, EveryLeafSizeMatchesBruteForce) {
     scene.meshes.push_back(test::make_triangle_soup(300, 21, 0.05f));
     scene.instances.push_back({MeshId(2), AffineTransform::scale({2.0f, 1.0f, 1.5f})});
     const BruteForceAccel reference(scene);
-    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 3000, 5);
+    const std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 3000, 5);
     const test::AccelAnswers expected = test::trace_all(reference, rays);
     for (std::uint32_t leaf_size : {1u, 2u, 3u, 4u, 5u, 7u, 8u, 9u, 12u, 16u}) {
         for (const auto& [name, accel] :
              project_accels(scene, {.max_leaf_size = leaf_size, .intersection_cost = 0.2f})) {
             SCOPED_TRACE(name + " with leaves of up to " + std::to_string(leaf_size));
-            test::expect_same_answers(expected, test::trace_all(*accel, rays),
+            test::expect_same_answers(scene, rays, expected, test::trace_all(*accel, rays),
                                       test::tolerance_for(scene.bounds()));
         }
     }

@@ -27,6 +27,7 @@
 #include "rebraid/top_level/bvh_stats.h"
 #include "support/gltf_animation_files.h"
 #include "support/hit_comparison.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -84,9 +85,16 @@ void run_frames(DynamicScene& dynamic, Updatable& accel, int frames) {
     }
 }
 
-test::AccelAnswers embree_flat_answers(const Scene& scene, const std::vector<Ray>& rays) {
+/// Each structure in `accels` answers 10,000 varied rays (test_rays.h) as Embree flat built
+/// over the scene as it is now.
+void expect_matches_embree_flat(const Scene& scene, std::initializer_list<const Accel*> accels,
+                                std::uint64_t seed) {
     const glue::EmbreeFlatAccel reference(scene);
-    return test::trace_all(reference, rays);
+    const std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 10000, seed);
+    const test::AccelAnswers expected = test::trace_all(reference, rays);
+    for (const Accel* accel : accels)
+        test::expect_same_answers(scene, rays, expected, test::trace_all(*accel, rays),
+                                  test::tolerance_for(scene.bounds()));
 }
 
 TEST(DynamicFrames, EveryStrategyAndTopMatchEmbreeFlatOnTheDeformedFrame) {
@@ -101,10 +109,7 @@ TEST(DynamicFrames, EveryStrategyAndTopMatchEmbreeFlatOnTheDeformedFrame) {
             settings.update.strategy = strategy;
             DynamicSceneAccel accel(dynamic, settings);
             run_frames(dynamic, accel, kFrameCount);
-            const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 3);
-            test::expect_same_answers(embree_flat_answers(dynamic.scene(), rays),
-                                      test::trace_all(accel.accel(), rays),
-                                      test::tolerance_for(dynamic.scene().bounds()));
+            expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 3);
         }
 }
 
@@ -129,10 +134,7 @@ TEST(DynamicFrames, StaticMeshesFromAnotherBuilderMatchEmbreeFlat) {
             differing += used.nodes.size() != own.nodes.size() || used.prim_ids != own.prim_ids;
         }
         EXPECT_GT(differing, 0u);
-        const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 6);
-        test::expect_same_answers(embree_flat_answers(dynamic.scene(), rays),
-                                  test::trace_all(accel.accel(), rays),
-                                  test::tolerance_for(dynamic.scene().bounds()));
+        expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 6);
     }
 }
 
@@ -145,10 +147,7 @@ TEST(DynamicFrames, EmbreeMethodsMatchEmbreeFlatBuiltFromScratch) {
         DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
         glue::EmbreeDynamicAccel accel(dynamic, mode);
         run_frames(dynamic, accel, kFrameCount);
-        const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 4);
-        test::expect_same_answers(embree_flat_answers(dynamic.scene(), rays),
-                                  test::trace_all(accel, rays),
-                                  test::tolerance_for(dynamic.scene().bounds()));
+        expect_matches_embree_flat(dynamic.scene(), {&accel}, 4);
     }
 }
 
@@ -165,11 +164,7 @@ TEST(DynamicFrames, RigidlyMovingGltfInstancesMatchEmbreeFlat) {
         accel.update();
         instanced.update();
     }
-    const std::vector<Ray> rays = generate_random_rays(dynamic.scene().bounds(), 10000, 5);
-    const test::AccelAnswers expected = embree_flat_answers(dynamic.scene(), rays);
-    const test::Tolerance tolerance = test::tolerance_for(dynamic.scene().bounds());
-    test::expect_same_answers(expected, test::trace_all(accel.accel(), rays), tolerance);
-    test::expect_same_answers(expected, test::trace_all(instanced, rays), tolerance);
+    expect_matches_embree_flat(dynamic.scene(), {&accel.accel(), &instanced}, 5);
 }
 
 std::uint64_t structure_hash_after_frames(UpdateStrategy strategy, DynamicTop top,

@@ -24,6 +24,7 @@
 #include "support/cli_runner.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -58,10 +59,10 @@ void run_frames(DynamicScene& dynamic, DynamicSceneAccel& accel, int frames) {
 void expect_matches_embree_flat(const DynamicScene& dynamic, const Accel& accel,
                                 std::uint64_t seed) {
     const Scene& scene = dynamic.scene();
-    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 10000, seed);
     const glue::EmbreeFlatAccel reference(scene);
-    test::expect_same_answers(test::trace_all(reference, rays), test::trace_all(accel, rays),
-                              test::tolerance_for(scene.bounds()));
+    const std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 10000, seed);
+    test::expect_same_answers(scene, rays, test::trace_all(reference, rays),
+                              test::trace_all(accel, rays), test::tolerance_for(scene.bounds()));
 }
 
 TEST(IncrementalTopLevel, MatchesEmbreeFlatOnTheDeformedFrameForEveryStrategy) {

@@ -21,6 +21,7 @@
 #include "rebraid/top_level/bvh_stats.h"
 #include "rebraid/top_level/instanced_accel.h"
 #include "support/hit_comparison.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -279,7 +280,7 @@ TEST(EmbreeBvhBuilderSettings, RejectsOutOfRangeValues) {
 /// spatial splits worse than none.
 void expect_two_level_matches_embree_flat(const Scene& scene, const std::string& scene_name) {
     const glue::EmbreeFlatAccel reference(scene);
-    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 10000, 42);
+    const std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 10000, 42);
     const test::AccelAnswers expected = test::trace_all(reference, rays);
     std::vector<NamedSettings> configurations = embree_configurations();
     std::erase_if(configurations, [](const NamedSettings& c) { return c.name == "high"; });
@@ -297,7 +298,7 @@ void expect_two_level_matches_embree_flat(const Scene& scene, const std::string&
         SCOPED_TRACE(scene_name + " / embree-" + named.name);
         const InstancedAccel accel =
             build_two_level_accel(scene, glue::embree_object_bvh_builder(named.settings));
-        test::expect_same_answers(expected, test::trace_all(accel, rays),
+        test::expect_same_answers(scene, rays, expected, test::trace_all(accel, rays),
                                   test::tolerance_for(scene.bounds()));
         const AccelStats stats = accel.stats();
         ASSERT_TRUE(stats.sah.has_value());

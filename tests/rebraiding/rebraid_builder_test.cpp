@@ -16,6 +16,7 @@
 #include "rebraid/top_level/two_level_builder.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 #include "support/thread_count_hash.h"
 
@@ -72,7 +73,7 @@ std::vector<test::NamedScene> rebraid_scenes() {
 TEST(RebraidBuilder, MatchesEmbreeFlatAtSeveralSettings) {
     for (const test::NamedScene& named : rebraid_scenes()) {
         const glue::EmbreeFlatAccel reference(named.scene);
-        const std::vector<Ray> rays = generate_random_rays(named.scene.bounds(), 10000, 7);
+        const std::vector<Ray> rays = test::varied_rays(reference, named.scene.bounds(), 10000, 7);
         const test::AccelAnswers expected = test::trace_all(reference, rays);
         const std::vector<ObjectBvh> bvhs =
             build_object_bvhs(named.scene, own_object_bvh_builder());
@@ -80,7 +81,7 @@ TEST(RebraidBuilder, MatchesEmbreeFlatAtSeveralSettings) {
             SCOPED_TRACE(named.name + " / " + variant.name);
             RebraidBuild build = build_rebraid(named.scene, bvhs, variant.settings);
             const InstancedAccel accel(named.scene, bvhs, std::move(build.top), {});
-            test::expect_same_answers(expected, test::trace_all(accel, rays),
+            test::expect_same_answers(named.scene, rays, expected, test::trace_all(accel, rays),
                                       test::tolerance_for(named.scene.bounds()));
         }
     }

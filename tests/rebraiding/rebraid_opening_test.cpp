@@ -1,5 +1,5 @@
-// The opening rules beyond the paper (SAH-aware, overlap-driven, leaf opening) keep every guarantee of
-// the paper's rule: hits equal Embree flat, every triangle reachable once, the budget kept, the
+// The opening rules beyond the paper (SAH-aware, overlap-driven, leaf opening) keep every guarantee
+// of the paper's rule: hits equal Embree flat, every triangle reachable once, the budget kept, the
 // same tree on any thread count; and the SAH-aware rule opens only where it pays.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -27,6 +27,7 @@
 #include "rebraid/top_level/two_level_builder.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 #include "support/thread_count_hash.h"
 
@@ -109,7 +110,7 @@ Scene make_separated_grid_scene() {
 TEST(RebraidOpening, NewRulesMatchEmbreeFlat) {
     for (const test::NamedScene& named : opening_scenes()) {
         const glue::EmbreeFlatAccel reference(named.scene);
-        const std::vector<Ray> rays = generate_random_rays(named.scene.bounds(), 10000, 11);
+        const std::vector<Ray> rays = test::varied_rays(reference, named.scene.bounds(), 10000, 11);
         const test::AccelAnswers expected = test::trace_all(reference, rays);
         const std::vector<ObjectBvh> bvhs =
             build_object_bvhs(named.scene, own_object_bvh_builder());
@@ -117,7 +118,7 @@ TEST(RebraidOpening, NewRulesMatchEmbreeFlat) {
             SCOPED_TRACE(named.name + " / " + variant.name);
             RebraidBuild build = build_rebraid(named.scene, bvhs, variant.settings);
             const InstancedAccel accel(named.scene, bvhs, std::move(build.top), {});
-            test::expect_same_answers(expected, test::trace_all(accel, rays),
+            test::expect_same_answers(named.scene, rays, expected, test::trace_all(accel, rays),
                                       test::tolerance_for(named.scene.bounds()));
         }
     }

@@ -1,8 +1,9 @@
 #pragma once
 
 // Comparing the answers of two structures on the same rays, with the tolerance the project
-// promises: same closest-hit t within 1e-4 relative, same instance and primitive ids
-// (unless two triangles are hit at the same t: a tie either may win), same occlusion.
+// promises: same closest-hit t within 1e-4 relative, same instance and primitive ids and
+// barycentrics (unless two triangles are hit at the same t: a tie either may win, checked to
+// be a real one and capped), same occlusion.
 
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
@@ -15,6 +16,7 @@
 
 #include "rebraid/core/accel.h"
 #include "rebraid/core/bbox.h"
+#include "rebraid/core/scene.h"
 
 namespace rebraid::test {
 
@@ -41,8 +43,20 @@ struct Tolerance {
     /// silhouette edge is hit depends on how the vertices were rounded (world-space copies in
     /// a flat structure, object-space originals behind a transform in an instanced one).
     float edge_graze = 1e-4f;
-    /// Largest fraction of rays allowed to differ at a grazed edge.
-    double max_graze_fraction = 1e-3;
+    /// Largest fraction of rays allowed to differ where the answer is fragile: at a grazed
+    /// edge, or in the barycentrics of a sliver triangle.
+    double max_fragile_fraction = 1e-3;
+    /// A triangle is a sliver when its area is below this fraction of its longest edge
+    /// squared: its barycentrics are ill-conditioned, so two correct kernels differ in them.
+    float sliver_quality = 1e-2f;
+    /// Largest fraction of rays whose closest hit may name another triangle hit at the same
+    /// t (an edge shared by two triangles, coplanar overlapping triangles): a tie either
+    /// structure may win. Buildings (city, fzk_haus) share edges and faces: up to 0.6 %.
+    double max_tie_fraction = 1e-2;
+    /// Smallest fraction of rays that must hit: a comparison of misses proves nothing.
+    double min_hit_fraction = 1e-2;
+    /// Largest difference of u or v between two hits on the same triangle.
+    float barycentric = 1e-3f;
 };
 
 inline Tolerance tolerance_for(const BBox3f& bounds) {
@@ -50,11 +64,11 @@ inline Tolerance tolerance_for(const BBox3f& bounds) {
     return {std::max({m.x, m.y, m.z, 1e-30f})};
 }
 
-/// Same t: within 1e-4 relative, or within 64 ulps of the scene's magnitude (rays from the
-/// generators have unit directions, so t is a world distance).
-inline bool same_t(float a, float b, const Tolerance& tolerance) {
+/// Same t: within 1e-4 relative, or within 64 ulps of the scene's magnitude measured along
+/// the ray (t is in units of the direction, which need not be normalised).
+inline bool same_t(float a, float b, const Tolerance& tolerance, float direction_length = 1.0f) {
     if (std::isinf(a) || std::isinf(b)) return a == b;
-    const float absolute = tolerance.scene_magnitude * 0x1.0p-18f;
+    const float absolute = tolerance.scene_magnitude * 0x1.0p-18f / direction_length;
     return std::fabs(a - b) <= 1e-4f * std::max(std::fabs(a), std::fabs(b)) + absolute;
 }
 
@@ -62,38 +76,110 @@ inline bool grazes_edge(const Hit& hit, const Tolerance& tolerance) {
     return hit.is_hit() && std::min({hit.u, hit.v, 1.0f - hit.u - hit.v}) < tolerance.edge_graze;
 }
 
-/// Asserts every ray agrees, but for rare disagreements at grazed edges; reports the first
-/// few disagreements with their ray index.
-inline void expect_same_answers(const AccelAnswers& expected, const AccelAnswers& actual,
+/// True when `hit` names a sliver triangle (see Tolerance::sliver_quality), in world space.
+inline bool hits_sliver(const Scene& scene, const Hit& hit, const Tolerance& tolerance) {
+    const Instance& instance = scene.instances[hit.instance_id];
+    const auto corners = scene.meshes[instance.mesh_id].corners(hit.prim_id);
+    const Vec3f a = instance.object_to_world.transform_point(corners[0]);
+    const Vec3f b = instance.object_to_world.transform_point(corners[1]);
+    const Vec3f c = instance.object_to_world.transform_point(corners[2]);
+    const float longest = std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
+    return !(length(cross(b - a, c - a)) >= tolerance.sliver_quality * longest);
+}
+
+/// True when `hit`'s instance, primitive and barycentrics name the world-space point the
+/// ray reaches at hit.t (within 1e-5 of the scene's magnitude, plus 1e-5 of the distance
+/// travelled): the triangle a hit names is really hit there.
+inline bool hit_names_its_point(const Scene& scene, const Ray& ray, const Hit& hit,
                                 const Tolerance& tolerance) {
-    ASSERT_EQ(expected.hits.size(), actual.hits.size());
-    std::size_t mismatches = 0, grazes = 0, hits = 0;
-    for (std::size_t i = 0; i < expected.hits.size(); ++i) {
+    if (hit.instance_id >= scene.instances.size()) return false;
+    const Instance& instance = scene.instances[hit.instance_id];
+    const Mesh& mesh = scene.meshes[instance.mesh_id];
+    if (hit.prim_id >= mesh.triangles.size()) return false;
+    if (!(hit.u >= -tolerance.edge_graze && hit.v >= -tolerance.edge_graze &&
+          hit.u + hit.v <= 1.0f + tolerance.edge_graze))
+        return false;
+    const auto [p0, p1, p2] = mesh.corners(hit.prim_id);
+    const Vec3f on_triangle = instance.object_to_world.transform_point(p0 * (1.0f - hit.u - hit.v) +
+                                                                       p1 * hit.u + p2 * hit.v);
+    const Vec3f travelled = ray.dir * hit.t;
+    const float error = length(ray.org + travelled - on_triangle);
+    return error <= 1e-5f * (tolerance.scene_magnitude + length(travelled));
+}
+
+/// What a comparison of two structures' answers found.
+struct ComparisonCounts {
+    std::size_t rays = 0;
+    std::size_t hits = 0;        ///< rays the expected structure hits
+    std::size_t ties = 0;        ///< same t, another triangle that is really hit there
+    std::size_t fragile = 0;     ///< differences excused at a grazed edge or on a sliver
+    std::size_t mismatches = 0;  ///< everything else that differs
+};
+
+/// Compares `actual` with `expected` (answers to `rays` over `scene`) ray by ray: the same
+/// miss or hit, the same t, the same instance and primitive ids and (on the same triangle)
+/// the same u and v, the same occlusion. Ids
+/// may differ only on a tie: both hits at the same t, each naming a triangle that really holds the
+/// point there; ties are counted and capped. A difference where either hit grazes an edge is
+/// counted and capped too, as are different barycentrics on a sliver triangle. Asserts no
+/// mismatches, the caps, and a minimum share of hits; reports the first few mismatches with their
+/// rays. Returns the counts.
+inline ComparisonCounts expect_same_answers(const Scene& scene, const std::vector<Ray>& rays,
+                                            const AccelAnswers& expected,
+                                            const AccelAnswers& actual,
+                                            const Tolerance& tolerance) {
+    ComparisonCounts counts;
+    EXPECT_EQ(expected.hits.size(), rays.size());
+    EXPECT_EQ(actual.hits.size(), rays.size());
+    if (expected.hits.size() != rays.size() || actual.hits.size() != rays.size()) return counts;
+    counts.rays = rays.size();
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const Ray& ray = rays[i];
         const Hit& e = expected.hits[i];
         const Hit& a = actual.hits[i];
-        hits += e.is_hit();
-        const bool same_ids = e.instance_id == a.instance_id && e.prim_id == a.prim_id;
-        // Ids may differ on a tie: both hit at the same t (a shared edge or coplanar
-        // overlapping triangles).
-        const bool same_hit =
-            same_t(e.t, a.t, tolerance) && (same_ids || (e.is_hit() && a.is_hit()));
-        const bool same_occlusion = expected.occluded[i] == actual.occluded[i];
-        if (same_hit && same_occlusion) continue;
-        if (grazes_edge(e, tolerance) || grazes_edge(a, tolerance)) {
-            ++grazes;
+        counts.hits += e.is_hit();
+        bool is_tie = false, is_sliver_difference = false;
+        bool agrees = e.is_hit() == a.is_hit();
+        if (agrees && e.is_hit()) {
+            agrees = same_t(e.t, a.t, tolerance, length(ray.dir));
+            if (agrees && (e.instance_id != a.instance_id || e.prim_id != a.prim_id)) {
+                is_tie = true;
+                agrees = hit_names_its_point(scene, ray, a, tolerance) &&
+                         hit_names_its_point(scene, ray, e, tolerance);
+            } else if (agrees) {
+                agrees = std::fabs(e.u - a.u) <= tolerance.barycentric &&
+                         std::fabs(e.v - a.v) <= tolerance.barycentric;
+                is_sliver_difference = !agrees && hits_sliver(scene, a, tolerance);
+            }
+        }
+        agrees = agrees && expected.occluded[i] == actual.occluded[i];
+        if (agrees) {
+            counts.ties += is_tie;
             continue;
         }
-        if (++mismatches <= 5)
-            ADD_FAILURE() << "ray " << i << ": expected t=" << e.t << " inst=" << e.instance_id
-                          << " prim=" << e.prim_id << " occluded=" << int(expected.occluded[i])
-                          << ", got t=" << a.t << " inst=" << a.instance_id << " prim=" << a.prim_id
-                          << " occluded=" << int(actual.occluded[i]);
+        if (is_sliver_difference || grazes_edge(e, tolerance) || grazes_edge(a, tolerance)) {
+            ++counts.fragile;
+            continue;
+        }
+        if (++counts.mismatches <= 5)
+            ADD_FAILURE() << "ray " << i << " (org " << ray.org.x << " " << ray.org.y << " "
+                          << ray.org.z << ", dir " << ray.dir.x << " " << ray.dir.y << " "
+                          << ray.dir.z << ", t [" << ray.tnear << ", " << ray.tfar
+                          << "]): expected t=" << e.t << " inst=" << e.instance_id
+                          << " prim=" << e.prim_id << " u=" << e.u << " v=" << e.v
+                          << " occluded=" << int(expected.occluded[i]) << ", got t=" << a.t
+                          << " inst=" << a.instance_id << " prim=" << a.prim_id << " u=" << a.u
+                          << " v=" << a.v << " occluded=" << int(actual.occluded[i]);
     }
-    EXPECT_EQ(mismatches, 0u);
-    EXPECT_LE(double(grazes), tolerance.max_graze_fraction * double(expected.hits.size()))
-        << grazes << " rays disagree at grazed edges";
-    // A comparison on rays that all miss would prove nothing.
-    EXPECT_GT(hits, expected.hits.size() / 50) << "too few rays hit the scene";
+    const double ray_count = double(rays.size());
+    EXPECT_EQ(counts.mismatches, 0u);
+    EXPECT_LE(double(counts.fragile), tolerance.max_fragile_fraction * ray_count)
+        << counts.fragile << " rays disagree at grazed edges or on slivers";
+    EXPECT_LE(double(counts.ties), tolerance.max_tie_fraction * ray_count)
+        << counts.ties << " rays hit another triangle at the same t";
+    EXPECT_GE(double(counts.hits), tolerance.min_hit_fraction * ray_count)
+        << "too few rays hit the scene";
+    return counts;
 }
 
 /// The .glb files in the shared scene folder (at least the nine of its MANIFEST).

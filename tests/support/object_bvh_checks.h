@@ -19,6 +19,7 @@
 #include "rebraid/top_level/instanced_accel.h"
 #include "rebraid/top_level/two_level_builder.h"
 #include "support/hit_comparison.h"
+#include "support/test_rays.h"
 
 namespace rebraid::test {
 
@@ -127,8 +128,8 @@ inline void expect_valid(const Mesh& mesh, const ObjectBvh& bvh) {
     EXPECT_EQ(bvh.bounds, mesh.bounds());
 }
 
-/// The updated tree answers 10,000 random rays (closest hit and occlusion) as Embree flat
-/// built on the same deformed frame.
+/// The updated tree answers 10,000 varied rays (test_rays.h; closest hit and occlusion) as Embree
+/// flat built on the same deformed frame.
 inline void expect_hits_of_embree_flat(const Mesh& mesh, const ObjectBvh& bvh) {
     Scene scene;
     scene.meshes.push_back(mesh);
@@ -137,8 +138,8 @@ inline void expect_hits_of_embree_flat(const Mesh& mesh, const ObjectBvh& bvh) {
     TopLevelBvh top = build_two_level(scene, bvhs);
     const InstancedAccel updated(scene, std::move(bvhs), std::move(top), AccelStats{});
     const glue::EmbreeFlatAccel reference(scene);
-    const std::vector<Ray> rays = generate_random_rays(mesh.bounds(), 10000, 5);
-    expect_same_answers(trace_all(reference, rays), trace_all(updated, rays),
+    const std::vector<Ray> rays = varied_rays(reference, mesh.bounds(), 10000, 5);
+    expect_same_answers(scene, rays, trace_all(reference, rays), trace_all(updated, rays),
                         tolerance_for(mesh.bounds()));
 }
 

@@ -17,6 +17,7 @@
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instanced_accel.h"
 #include "support/hit_comparison.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -41,12 +42,12 @@ std::vector<NamedAccel> project_accels() {
 
 void expect_matches_embree_flat(const Scene& scene, const std::string& scene_name) {
     const glue::EmbreeFlatAccel reference(scene);
-    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 10000, 42);
+    const std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 10000, 42);
     const test::AccelAnswers expected = test::trace_all(reference, rays);
     for (const NamedAccel& named : project_accels()) {
         SCOPED_TRACE(scene_name + " / " + named.name);
         const std::unique_ptr<Accel> accel = named.make(scene);
-        test::expect_same_answers(expected, test::trace_all(*accel, rays),
+        test::expect_same_answers(scene, rays, expected, test::trace_all(*accel, rays),
                                   test::tolerance_for(scene.bounds()));
     }
 }
