@@ -381,12 +381,13 @@ TEST(CliErrors, BadRayLineNamesFileAndLine) {
     EXPECT_NE(result.err.find("line 2"), std::string::npos) << result.err;
 }
 
-TEST(CliErrors, ParseErrorsExitNonZero) {
-    EXPECT_NE(run_rebraid({"trace"}).exit_code, 0);                      // RAYS missing
-    EXPECT_NE(run_rebraid({"trace", "a", "b", "c"}).exit_code, 0);       // one too many
-    EXPECT_NE(run_rebraid({"rays"}).exit_code, 0);                       // --count missing
-    EXPECT_NE(run_rebraid({"render", "--threads", "-2"}).exit_code, 0);  // negative threads
-    EXPECT_NE(run_rebraid({"no-such-command"}).exit_code, 0);
+TEST(CliErrors, ParseErrorsExitWithOne) {
+    // Exactly 1, as the README promises: not a crash, a sanitizer's exit code or an abort.
+    EXPECT_EQ(run_rebraid({"trace"}).exit_code, 1);                      // RAYS missing
+    EXPECT_EQ(run_rebraid({"trace", "a", "b", "c"}).exit_code, 1);       // one too many
+    EXPECT_EQ(run_rebraid({"rays"}).exit_code, 1);                       // --count missing
+    EXPECT_EQ(run_rebraid({"render", "--threads", "-2"}).exit_code, 1);  // negative threads
+    EXPECT_EQ(run_rebraid({"no-such-command"}).exit_code, 1);
 }
 
 TEST(CliHelp, EverySubcommandDocumentsItsOptions) {

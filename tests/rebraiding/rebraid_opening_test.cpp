@@ -25,6 +25,7 @@
 #include "rebraid/rebraiding/overlap_opening.h"
 #include "rebraid/rebraiding/rebraid_builder.h"
 #include "rebraid/top_level/two_level_builder.h"
+#include "support/cli_runner.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
 #include "support/test_rays.h"
@@ -144,12 +145,14 @@ TEST(RebraidOpening, SameStructureOnOneTwoAndEightThreads) {
         // The object BVHs' own determinism is rebraid_builder_test's; here the top levels.
         const std::vector<ObjectBvh> bvhs =
             build_object_bvhs(named.scene, own_object_bvh_builder());
+        std::size_t checked = 0;
         for (NamedSettings variant : new_rule_variants()) {
             // The variants that exercise the most code: SAH estimate with the tighter bounds
             // and leaf opening, and the overlap grid.
             if (variant.name != "sah-leaves-children" && variant.name != "overlap-no-threshold" &&
                 variant.name != "sah-entry-cost")
                 continue;
+            ++checked;
             SCOPED_TRACE(named.name + " / " + variant.name);
             // A small threshold makes the parallel opening, binning and estimate paths run.
             variant.settings.build.parallel_threshold = 64;
@@ -159,6 +162,7 @@ TEST(RebraidOpening, SameStructureOnOneTwoAndEightThreads) {
                 return *accel.stats().structure_hash;
             });
         }
+        EXPECT_EQ(checked, 3u) << "a variant this test names is gone: update the names";
     }
 }
 
@@ -473,11 +477,22 @@ TEST(RebraidOpeningCli, BenchComparesVariantsOnTheSameRaysByName) {
 const std::string kSmallScene = std::string(REBRAID_SHARED_SCENES) + "/motion_capture_rom.glb";
 
 TEST(RebraidOpeningCli, BadVariantSettingsFailWithOneMessage) {
-    for (const char* accel :
-         {"rebraid:opening=magic", "rebraid:frobnicate=1", "rebraid:open-threshold=-1"}) {
-        const auto [code, out] =
-            run_cli(std::string("stats --accel ") + accel + " " + kSmallScene, "bad_variant");
-        EXPECT_EQ(code, 1) << accel;
+    const std::filesystem::path dir =
+        std::filesystem::path(REBRAID_TEST_TMP) / "rebraid_opening_test";
+    std::filesystem::create_directories(dir);
+    // Each bad variant: exit code 1 and one `rebraid: ` line naming what is wrong.
+    const std::pair<std::string, std::string> cases[] = {
+        {"rebraid:opening=magic", "opening=magic"},
+        {"rebraid:frobnicate=1", "frobnicate"},
+        {"rebraid:open-threshold=-1", "-1"},
+    };
+    for (const auto& [accel, phrase] : cases) {
+        const test::CommandResult result =
+            test::run_rebraid_in(dir, {"stats", "--accel", accel, kSmallScene}, 120);
+        EXPECT_EQ(result.exit_code, 1) << accel;
+        EXPECT_EQ(result.err.rfind("rebraid: ", 0), 0u) << accel << ": " << result.err;
+        EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+        EXPECT_NE(result.err.find(phrase), std::string::npos) << accel << ": " << result.err;
     }
     const auto [code, out] = run_cli(
         std::string("stats --accel rebraid:opening=overlap --json ") + kSmallScene, "stats");

@@ -44,8 +44,10 @@ namespace fs = std::filesystem;
 constexpr std::uint64_t kTwoLevelAddressLimit = std::uint64_t(1) << 30;  // 1 GiB
 
 /// Limit for the re-braided build with --budget-factor 1e6: the capped BRef array (2^22 extra
-/// BRefs), its build scratch (allocated once for the whole build rather than per partition) and the top level. Measured peak resident memory: about 1.1 GiB (760 MiB
-/// before the build kept its scratch). Uncapped, the array alone would need over 5 GiB.
+/// BRefs), its build scratch (allocated once for the whole build rather than per partition,
+/// which is why it is 2 GiB and not the 1.5 GiB of a build that allocated per partition) and
+/// the top level. Measured peak resident memory: about 1.1 GiB. Uncapped, the array alone
+/// would need over 5 GiB.
 constexpr std::uint64_t kHugeBudgetAddressLimit = std::uint64_t(1) << 31;  // 2 GiB
 
 /// Bytes a flat structure must at least hold per instanced triangle, counting only its
@@ -80,10 +82,12 @@ CommandResult run(const std::string& command) {
     return result;
 }
 
-/// `rebraid ARGS` under an address-space limit of `limit` bytes.
+/// `rebraid ARGS` on two threads under an address-space limit of `limit` bytes. The thread
+/// count is pinned: every TBB worker maps a stack and a malloc arena, so the address space a
+/// build needs grows with the cores of the machine, and the limits are set for two.
 std::string limited_rebraid(std::uint64_t limit, const std::string& arguments) {
     return "prlimit --as=" + std::to_string(limit) + " '" + std::string(REBRAID_CLI) + "' " +
-           arguments;
+           arguments + " --threads 2";
 }
 
 /// The huge generated scene (12,000 instances, about 176 M instanced triangles), written
