@@ -1,5 +1,6 @@
 #include "rebraid/core/transform.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rebraid {
@@ -39,6 +40,22 @@ BBox3f AffineTransform::transform_bbox(const BBox3f& box) const {
         const Vec3f hi = *cols[in_axis] * box.max[in_axis];
         out.min = out.min + rebraid::min(lo, hi);
         out.max = out.max + rebraid::max(lo, hi);
+    }
+    return out;
+}
+
+BBox3f AffineTransform::transform_bbox_conservative(const BBox3f& box) const {
+    BBox3f out = transform_bbox(box);
+    if (out.is_empty() || *this == identity()) return out;
+    const Vec3f* cols[3] = {&col_x, &col_y, &col_z};
+    for (int axis = 0; axis < 3; ++axis) {
+        float terms = std::fabs(translation[axis]);
+        for (int in_axis = 0; in_axis < 3; ++in_axis)
+            terms += std::fabs((*cols[in_axis])[axis]) *
+                     std::max(std::fabs(box.min[in_axis]), std::fabs(box.max[in_axis]));
+        const float pad = terms * 0x1p-20f;
+        out.min[axis] -= pad;
+        out.max[axis] += pad;
     }
     return out;
 }

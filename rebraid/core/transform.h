@@ -33,6 +33,12 @@ struct AffineTransform {
     /// The smallest AABB holding the transformed box (conservative: the box of the image of
     /// the box, paper §5.4). An empty box stays empty.
     BBox3f transform_bbox(const BBox3f& box) const;
+    /// transform_bbox widened so that it holds every point of `box` as transform_point()
+    /// rounds it (the two sum their terms in different orders): by 8 ulps of the largest sum
+    /// of absolute terms per axis. The identity maps exactly and widens nothing. For the
+    /// boxes of structures, whose box tests must never cull a point the object-space test
+    /// finds.
+    BBox3f transform_bbox_conservative(const BBox3f& box) const;
     friend bool operator==(const AffineTransform&, const AffineTransform&) = default;
 };
 

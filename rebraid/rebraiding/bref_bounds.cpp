@@ -36,14 +36,14 @@ BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_
                          const AffineTransform& to_world, BRefBoundsRule rule) {
     if (rule == BRefBoundsRule::transformed_box || node.is_empty() ||
         to_world == AffineTransform::identity())
-        return to_world.transform_bbox(node_box);
+        return to_world.transform_bbox_conservative(node_box);
     if (node.is_leaf()) return transformed_leaf_bounds(bvh, node, to_world);
     if (rule == BRefBoundsRule::transformed_vertices)
         return vertex_world_bounds(bvh, node, node_box, to_world);
     const WideNode& wide = bvh.nodes[node.node_id()];
     BBox3f box;
     for (int c = 0; c < kBvhWidth && !wide.children[c].is_empty(); ++c)
-        box.extend(to_world.transform_bbox(wide.child_bounds(c)));
+        box.extend(to_world.transform_bbox_conservative(wide.child_bounds(c)));
     return box;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "rebraid/bvh/binned_split.h"
+#include "rebraid/bvh/fit_inner_boxes.h"
 #include "rebraid/bvh/object_subtree_counts.h"
 #include "rebraid/bvh/wide_tree_grower.h"
 #include "rebraid/core/scratch_buffer.h"
@@ -382,6 +383,8 @@ TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> o
         threads > 1 ? settings.build.task_threshold : std::numeric_limits<std::size_t>::max();
     const WideTreeGrower<RebraidPolicy, RebraidCandidate> grower(policy, threshold, task_threshold);
     if (n > 0) top.root = root.is_leaf ? policy.make_leaf(root) : grower.grow(root, top.nodes);
+    // BRefs opened below a node after its box was written may reach past it by rounding.
+    top.bounds.extend(fit_inner_boxes(top.nodes, top.root));
     std::vector<std::uint32_t> item_slots;
     emit_items(top, prims, targets, item_slots);
     result.brefs = top.items.size();

@@ -47,7 +47,7 @@ TopLevelBvh build_two_level(const Scene& scene, std::span<const ObjectBvh> objec
         const ObjectBvh& bvh = object_bvhs[instance.mesh_id];
         if (bvh.root.is_empty()) continue;
         items.push_back({InstanceId(i), bvh.root});
-        bounds.push_back(instance.object_to_world.transform_bbox(bvh.bounds));
+        bounds.push_back(instance.object_to_world.transform_bbox_conservative(bvh.bounds));
         prim_counts.push_back(bvh.prim_count());
     }
     TopLevelBvh top =

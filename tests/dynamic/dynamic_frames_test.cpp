@@ -25,6 +25,7 @@
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/rebraiding/rebraid_builder.h"
 #include "rebraid/top_level/bvh_stats.h"
+#include "support/containment.h"
 #include "support/gltf_animation_files.h"
 #include "support/hit_comparison.h"
 #include "support/test_rays.h"
@@ -110,6 +111,9 @@ TEST(DynamicFrames, EveryStrategyAndTopMatchEmbreeFlatOnTheDeformedFrame) {
             DynamicSceneAccel accel(dynamic, settings);
             run_frames(dynamic, accel, kFrameCount);
             expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 3);
+            // Refit, rotated or rebuilt object trees under a rebuilt top: every box still
+            // holds the deformed triangles below it.
+            test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "after frames");
         }
 }
 

@@ -22,6 +22,7 @@
 #include "rebraid/rebraiding/rebraid_builder.h"
 #include "rebraid/top_level/bvh_stats.h"
 #include "support/cli_runner.h"
+#include "support/containment.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
 #include "support/test_rays.h"
@@ -89,6 +90,7 @@ TEST(IncrementalTopLevel, MatchesEmbreeFlatWithRigidlyMovingGltfParts) {
     }
     expect_matches_embree_flat(dynamic, accel.accel(), 5);
     test::expect_each_reached_once(test::reach_counts(dynamic.scene(), accel.accel()));
+    test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "incremental top");
 }
 
 TEST(IncrementalTopLevel, ReachesEveryTriangleOnce) {
@@ -97,6 +99,7 @@ TEST(IncrementalTopLevel, ReachesEveryTriangleOnce) {
     DynamicSceneAccel accel(dynamic, incremental_settings(UpdateStrategy::rebuild));
     run_frames(dynamic, accel, kFrameCount);
     test::expect_each_reached_once(test::reach_counts(dynamic.scene(), accel.accel()));
+    test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "incremental top");
 }
 
 std::uint64_t structure_hash_after_frames(UpdateStrategy strategy, int thread_count) {

@@ -48,11 +48,42 @@ inline bool is_fragile_hit(const Scene& scene, const Ray& ray, const Hit& hit,
     return std::fabs(dot(normal, ray.dir)) < tolerance.grazing_cosine * area * length(ray.dir);
 }
 
-/// Empty when `candidate` answers every ray as `reference` does (closest hit and occlusion)
-/// within `tolerance`; otherwise a description of the first disagreement.
-inline std::string compare_answers(const Scene& scene, const Accel& reference,
-                                   const Accel& candidate, std::span<const Ray> rays,
-                                   const AnswerTolerance& tolerance = {}) {
+/// What compare_answers() found on a batch of rays.
+struct AnswerComparison {
+    std::string disagreement;  ///< empty, or a description of the first disagreement
+    std::size_t rays = 0;
+    std::size_t hits = 0;              ///< rays the reference hits
+    std::size_t ties = 0;              ///< same t, another triangle that is really hit there
+    std::size_t excused_fragile = 0;   ///< differences excused on a fragile closer hit
+    std::size_t excused_at_tnear = 0;  ///< differences excused at the start of the segment
+
+    bool agrees() const { return disagreement.empty(); }
+    /// Rays whose difference was excused, of every kind.
+    std::size_t excused() const { return excused_fragile + excused_at_tnear; }
+};
+
+/// True when `hit`'s triangle, u and v name the point of the ray at hit.t (within 1e-4 of the
+/// scene's magnitude plus of the distance travelled): the triangle is really hit there.
+inline bool names_its_point(const Scene& scene, const Ray& ray, const Hit& hit, float magnitude) {
+    if (hit.instance_id >= scene.instances.size()) return false;
+    const Instance& instance = scene.instances[hit.instance_id];
+    const Mesh& mesh = scene.meshes[instance.mesh_id];
+    if (hit.prim_id >= mesh.triangles.size()) return false;
+    const std::array<Vec3f, 3> c = mesh.corners(hit.prim_id);
+    const Vec3f on_triangle = instance.object_to_world.transform_point(
+        c[0] * (1.0f - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v);
+    const Vec3f travelled = ray.dir * hit.t;
+    return length(ray.org + travelled - on_triangle) <= 1e-4f * (magnitude + length(travelled));
+}
+
+/// Compares `candidate` with `reference` ray by ray (closest hit and occlusion) within
+/// `tolerance`: the first disagreement, and how many rays hit, tied or were excused. A
+/// different triangle at the same t is a tie only when both hits name a point on their
+/// triangle there (or the candidate's closer hit is fragile).
+inline AnswerComparison compare_answers(const Scene& scene, const Accel& reference,
+                                        const Accel& candidate, std::span<const Ray> rays,
+                                        const AnswerTolerance& tolerance = {}) {
+    AnswerComparison result;
     const BBox3f bounds = scene.bounds();
     float magnitude = 0.0f;
     for (int axis = 0; axis < 3; ++axis)
@@ -62,33 +93,65 @@ inline std::string compare_answers(const Scene& scene, const Accel& reference,
         const Hit expected = reference.intersect(ray);
         const Hit actual = candidate.intersect(ray);
         const bool is_occluded = candidate.occluded(ray);
-        std::ostringstream why;
-        why << "ray " << i << " (org " << ray.org.x << " " << ray.org.y << " " << ray.org.z
-            << " dir " << ray.dir.x << " " << ray.dir.y << " " << ray.dir.z
-            << "): expected t=" << expected.t << " inst=" << expected.instance_id
-            << " prim=" << expected.prim_id << ", got t=" << actual.t
-            << " inst=" << actual.instance_id << " prim=" << actual.prim_id
-            << " occluded=" << is_occluded;
-        if (is_occluded != actual.is_hit() && !is_fragile_hit(scene, ray, expected, tolerance))
-            return "occluded() disagrees with intersect(): " + why.str();
+        ++result.rays;
+        result.hits += expected.is_hit();
+        const auto describe = [&] {
+            std::ostringstream why;
+            why << "ray " << i << " (org " << ray.org.x << " " << ray.org.y << " " << ray.org.z
+                << " dir " << ray.dir.x << " " << ray.dir.y << " " << ray.dir.z
+                << "): expected t=" << expected.t << " inst=" << expected.instance_id
+                << " prim=" << expected.prim_id << ", got t=" << actual.t
+                << " inst=" << actual.instance_id << " prim=" << actual.prim_id
+                << " occluded=" << is_occluded;
+            return why.str();
+        };
+        if (is_occluded != actual.is_hit()) {
+            if (!is_fragile_hit(scene, ray, expected, tolerance)) {
+                result.disagreement = "occluded() disagrees with intersect(): " + describe();
+                return result;
+            }
+            ++result.excused_fragile;
+            continue;
+        }
         if (!expected.is_hit() && !actual.is_hit()) continue;
         if (expected.is_hit() && actual.is_hit()) {
             const float allowed =
                 tolerance.relative_t * std::max(expected.t, actual.t) + magnitude * 0x1.0p-16f;
-            if (std::fabs(expected.t - actual.t) <= allowed) continue;  // ids may differ on ties
+            if (std::fabs(expected.t - actual.t) <= allowed) {
+                const bool same_ids = expected.instance_id == actual.instance_id &&
+                                      expected.prim_id == actual.prim_id;
+                if (same_ids) continue;
+                if (names_its_point(scene, ray, actual, magnitude) &&
+                    names_its_point(scene, ray, expected, magnitude)) {
+                    ++result.ties;
+                    continue;
+                }
+                if (is_fragile_hit(scene, ray, actual, tolerance)) {
+                    ++result.excused_fragile;
+                    continue;
+                }
+                result.disagreement = "another triangle at the same t: " + describe();
+                return result;
+            }
         }
         // A hit at the very start of the segment (the origin lies on the triangle, to
         // within rounding of the scene's magnitude) may or may not be reported: Embree
         // gives no guarantee at tnear, and an instanced structure computes t in object space.
-        const Hit& first = expected.t <= actual.t ? expected : actual;
-        if (first.t - ray.tnear <= magnitude * 0x1.0p-16f) continue;
+        const Hit& closer = expected.t <= actual.t ? expected : actual;
+        if (closer.t - ray.tnear <= magnitude * 0x1.0p-16f) {
+            ++result.excused_at_tnear;
+            continue;
+        }
         // One of the two found a hit the other passed: fine only when that closer hit is
         // fragile.
-        const Hit& closer = expected.t <= actual.t ? expected : actual;
-        if (is_fragile_hit(scene, ray, closer, tolerance)) continue;
-        return why.str();
+        if (is_fragile_hit(scene, ray, closer, tolerance)) {
+            ++result.excused_fragile;
+            continue;
+        }
+        result.disagreement = describe();
+        return result;
     }
-    return {};
+    return result;
 }
 
 }  // namespace rebraid::fuzz

@@ -25,7 +25,7 @@ void expect_agreement(const rebraid::Scene& scene, const rebraid::Accel& referen
                       const rebraid::Accel& candidate, std::span<const rebraid::Ray> rays,
                       const char* name) {
     const std::string disagreement =
-        rebraid::fuzz::compare_answers(scene, reference, candidate, rays);
+        rebraid::fuzz::compare_answers(scene, reference, candidate, rays).disagreement;
     if (disagreement.empty()) return;
     std::fprintf(stderr, "%s disagrees with embree-flat: %s\n", name, disagreement.c_str());
     std::abort();

@@ -1,11 +1,19 @@
-// libFuzzer target: the glTF loader (load_gltf_scene) on arbitrary bytes, as .glb and as
-// .gltf. Every input must either throw rebraid::Error or give a scene that passes
-// Scene::validate() and the loader's documented limits.
+// libFuzzer target: the glTF loader (load_gltf_scene) on arbitrary bytes. Every input must
+// either throw rebraid::Error or give a scene that passes Scene::validate() and the loader's
+// documented limits.
+//
+// The container follows the content, as for a file on disk: an input starting with the
+// binary glTF magic "glTF" is written as a .glb, anything else as a .gltf (JSON text), byte
+// for byte. The loader reads files only (rebraid/io/gltf_scene.h has no in-memory entry
+// point), so each input goes through a scratch file in a folder of this process's own, where
+// relative buffer URIs find nothing but the input itself.
 #include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <string>
 
@@ -14,17 +22,42 @@
 
 namespace {
 
-/// A scratch file of this process (parallel fuzz jobs must not share one).
-std::string scratch_path(const char* extension) {
-    const char* dir = std::getenv("TMPDIR");
-    return std::string(dir != nullptr ? dir : "/tmp") + "/rebraid_fuzz_gltf_" +
-           std::to_string(::getpid()) + extension;
+/// A folder of this process (parallel fuzz jobs and replays must not share one), removed at
+/// exit.
+const std::string& scratch_folder() {
+    static const std::string folder = [] {
+        const char* tmp = std::getenv("TMPDIR");
+        std::string pattern = std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") +
+                              "/rebraid_fuzz_gltf_XXXXXX";
+        if (::mkdtemp(pattern.data()) == nullptr) {
+            std::perror("fuzz_gltf_loader: mkdtemp");
+            std::abort();
+        }
+        return pattern;
+    }();
+    static const bool removed_at_exit = [] {
+        std::atexit([] { ::rmdir(scratch_folder().c_str()); });
+        return true;
+    }();
+    (void)removed_at_exit;
+    return folder;
 }
 
-void load_and_check(const std::uint8_t* data, std::size_t size, const char* extension) {
-    const std::string path = scratch_path(extension);
-    std::ofstream(path, std::ios::binary | std::ios::trunc)
-        .write(reinterpret_cast<const char*>(data), std::streamsize(size));
+/// True when the bytes start with the binary glTF magic (0x46546C67 little-endian).
+bool has_glb_magic(const std::uint8_t* data, std::size_t size) {
+    return size >= 4 && std::memcmp(data, "glTF", 4) == 0;
+}
+
+/// REBRAID_FUZZ_VERBOSE=1 prints what became of each input (a replay's debugging aid).
+bool verbose() {
+    static const bool on = [] {
+        const char* value = std::getenv("REBRAID_FUZZ_VERBOSE");
+        return value != nullptr && std::strcmp(value, "1") == 0;
+    }();
+    return on;
+}
+
+void load_and_check(const std::string& path) {
     // Small limits: an input may declare huge counts, but the loader must refuse them
     // before it allocates, which these limits make cheap to check.
     const rebraid::GltfLoadOptions options{.max_triangles = 1u << 20, .max_vertices = 1u << 20};
@@ -33,17 +66,29 @@ void load_and_check(const std::uint8_t* data, std::size_t size, const char* exte
         scene.validate();  // the loader promises a valid scene
         if (scene.instances.empty()) std::abort();
         if (scene.mesh_triangle_count() > options.max_triangles) std::abort();
-    } catch (const rebraid::Error&) {
+        if (verbose())
+            std::fprintf(stderr, "  loaded %s: %zu meshes, %zu instances\n", path.c_str(),
+                         scene.meshes.size(), scene.instances.size());
+    } catch (const rebraid::Error& error) {
         // a documented rejection
+        if (verbose()) std::fprintf(stderr, "  rejected: %s\n", error.what());
     }
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    // The first byte picks the container so one corpus explores both parsers; .glb files
-    // start with "glTF", which the loader recognises whatever the extension.
-    if (size == 0) return 0;
-    load_and_check(data + 1, size - 1, (data[0] & 1) != 0 ? ".glb" : ".gltf");
+    const std::string path =
+        scratch_folder() + (has_glb_magic(data, size) ? "/input.glb" : "/input.gltf");
+    {
+        std::ofstream out(path, std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+        if (!out.flush()) {
+            std::perror(("fuzz_gltf_loader: cannot write " + path).c_str());
+            std::abort();
+        }
+    }
+    load_and_check(path);
+    std::remove(path.c_str());
     return 0;
 }

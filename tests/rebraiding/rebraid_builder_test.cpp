@@ -14,6 +14,7 @@
 #include "rebraid/generators/random_rays.h"
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/top_level/two_level_builder.h"
+#include "support/containment.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
 #include "support/test_rays.h"
@@ -105,6 +106,7 @@ TEST(RebraidBuilder, EveryTriangleReachableOnceAndBudgetKept) {
             }
             const InstancedAccel accel(named.scene, bvhs, std::move(build.top), {});
             test::expect_each_reached_once(test::reach_counts(named.scene, accel));
+            test::expect_boxes_enclose_geometry(named.scene, accel, named.name);
         }
     }
 }

@@ -26,6 +26,7 @@
 #include "rebraid/rebraiding/rebraid_builder.h"
 #include "rebraid/top_level/two_level_builder.h"
 #include "support/cli_runner.h"
+#include "support/containment.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
 #include "support/test_rays.h"
@@ -136,6 +137,7 @@ TEST(RebraidOpening, EveryTriangleReachableOnceAndBudgetKept) {
             EXPECT_EQ(build.top.items.size(), build.brefs);
             const InstancedAccel accel(named.scene, bvhs, std::move(build.top), {});
             test::expect_each_reached_once(test::reach_counts(named.scene, accel));
+            test::expect_boxes_enclose_geometry(named.scene, accel, named.name);
         }
     }
 }

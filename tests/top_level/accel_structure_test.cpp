@@ -10,6 +10,7 @@
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instanced_accel.h"
+#include "support/containment.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
 #include "support/test_scenes.h"
@@ -32,11 +33,12 @@ TEST(FlatAccel, EveryTriangleReachableOnce) {
     }
 }
 
-TEST(TwoLevelAccel, EveryTriangleReachableOnce) {
+TEST(TwoLevelAccel, EveryTriangleReachableOnceAndEnclosedByItsBoxes) {
     for (const test::NamedScene& named : all_scenes()) {
         SCOPED_TRACE(named.name);
-        test::expect_each_reached_once(
-            test::reach_counts(named.scene, build_two_level_accel(named.scene)));
+        const InstancedAccel accel = build_two_level_accel(named.scene);
+        test::expect_each_reached_once(test::reach_counts(named.scene, accel));
+        test::expect_boxes_enclose_geometry(named.scene, accel, named.name);
     }
 }
 

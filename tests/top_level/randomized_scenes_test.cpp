@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,11 +34,27 @@ constexpr fuzz::FuzzedCaseLimits kLargerScene{.max_meshes = 6,
                                               .random_rays = 400,
                                               .aimed_rays = 200};
 
-/// What a run over many seeds did.
+/// What a run over many seeds did, over every structure compared.
 struct SeedRunSummary {
     int checked = 0;    ///< seeds whose scene was built and compared
     int disagreed = 0;  ///< structures that disagreed with Embree flat
+    std::size_t rays = 0, hits = 0, ties = 0, excused = 0;
 };
+
+/// The bounds a run must keep. The fuzzed scenes, with their quantised and often nearly
+/// degenerate or coincident triangles, make many hits fragile and many ties (each tie checked
+/// to be a real one), yet excused rays stay a small share (measured: 0.1-1.8 % of the rays,
+/// ties 1.1-3.7 %) and a good share of the rays hit (40-45 %).
+void expect_bounded_excuses(const SeedRunSummary& summary) {
+    const double rays = double(summary.rays);
+    EXPECT_LE(double(summary.excused), 0.03 * rays)
+        << summary.excused << " of " << summary.rays << " rays excused as fragile or at tnear";
+    EXPECT_LE(double(summary.ties), 0.05 * rays) << summary.ties << " ties";
+    EXPECT_GE(double(summary.hits), 0.2 * rays)
+        << "only " << summary.hits << " of " << summary.rays << " rays hit";
+    std::printf("[ compared ] %zu rays, %zu hits, %zu ties, %zu excused\n", summary.rays,
+                summary.hits, summary.ties, summary.excused);
+}
 
 /// Builds every project structure over the case of `seed` and compares each with Embree flat.
 /// Adds a failure naming the seed and the structure for every disagreement.
@@ -54,13 +71,17 @@ void check_seed(std::uint64_t seed, const fuzz::FuzzedCaseLimits& limits, SeedRu
     const glue::EmbreeFlatAccel reference(scene);
     const test::NamedAccels structures = test::own_structures(scene, 64.0f);
     for (const auto& [name, accel] : structures) {
-        const std::string disagreement =
+        const fuzz::AnswerComparison comparison =
             fuzz::compare_answers(scene, reference, *accel, fuzzed.rays);
-        if (disagreement.empty()) continue;
+        summary.rays += comparison.rays;
+        summary.hits += comparison.hits;
+        summary.ties += comparison.ties;
+        summary.excused += comparison.excused();
+        if (comparison.agrees()) continue;
         ++summary.disagreed;
         ADD_FAILURE() << "seed " << seed << ", " << name << " (" << scene.instances.size()
                       << " instances, " << scene.instanced_triangle_count()
-                      << " triangles): " << disagreement;
+                      << " triangles): " << comparison.disagreement;
     }
 }
 
@@ -78,12 +99,14 @@ TEST(RandomizedScenes, SmallScenesMatchEmbreeFlat) {
     const SeedRunSummary summary = check_seeds(1, 40, {});
     EXPECT_EQ(summary.disagreed, 0);
     EXPECT_EQ(summary.checked, 40);  // the comparison really ran
+    expect_bounded_excuses(summary);
 }
 
 TEST(RandomizedScenes, LargerScenesMatchEmbreeFlat) {
     const SeedRunSummary summary = check_seeds(1001, 6, kLargerScene);
     EXPECT_EQ(summary.disagreed, 0);
     EXPECT_EQ(summary.checked, 6);
+    expect_bounded_excuses(summary);
 }
 
 TEST(RandomizedScenes, DecoderGivesValidScenesWithExtremeScalesAndMirrors) {
@@ -136,8 +159,10 @@ TEST(RandomizedScenes, HitAtTnearOnAHugeSceneIsNotADisagreement) {
     const fuzz::FuzzedCase fuzzed = fuzz::decode_case(bytes);
     const glue::EmbreeFlatAccel reference(fuzzed.scene);
     const InstancedAccel two_level = build_two_level_accel(fuzzed.scene);
-    EXPECT_EQ(fuzz::compare_answers(fuzzed.scene, reference, two_level, fuzzed.rays), "");
-    EXPECT_EQ(fuzz::compare_answers(fuzzed.scene, reference, FlatAccel(fuzzed.scene), fuzzed.rays),
+    EXPECT_EQ(fuzz::compare_answers(fuzzed.scene, reference, two_level, fuzzed.rays).disagreement,
+              "");
+    EXPECT_EQ(fuzz::compare_answers(fuzzed.scene, reference, FlatAccel(fuzzed.scene), fuzzed.rays)
+                  .disagreement,
               "");
 }
 
@@ -146,12 +171,14 @@ TEST(SlowRandomizedScenes, ThousandsOfSmallScenesMatchEmbreeFlat) {
     const SeedRunSummary summary = check_seeds(100000, 20000, {});
     EXPECT_EQ(summary.disagreed, 0);
     EXPECT_EQ(summary.checked, 20000);
+    expect_bounded_excuses(summary);
 }
 
 TEST(SlowRandomizedScenes, HundredsOfLargerScenesMatchEmbreeFlat) {
     const SeedRunSummary summary = check_seeds(200000, 1000, kLargerScene);
     EXPECT_EQ(summary.disagreed, 0);
     EXPECT_EQ(summary.checked, 1000);
+    expect_bounded_excuses(summary);
 }
 
 }  // namespace
