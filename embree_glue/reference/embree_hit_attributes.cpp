@@ -18,11 +18,39 @@
 namespace rebraid::glue {
 namespace {
 
+/// The hardware's 12-bit reciprocal estimate (rcpss), the start of Embree's reciprocal in
+/// its SSE, AVX and AVX2 kernels. The table is the CPU's own.
+float reciprocal_estimate_12(float x) {
+#if defined(REBRAID_HAS_SSE_RCP)
+    return _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(x)));
+#else
+    return 1.0f / x;
+#endif
+}
+
+/// The 14-bit estimate (vrcp14ss) Embree's AVX-512 kernels start from. Compiled for AVX-512
+/// on its own: only called where the CPU has it.
+#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx512f"))) float reciprocal_estimate_14(float x) {
+    return _mm_cvtss_f32(_mm_rcp14_ss(_mm_setzero_ps(), _mm_set_ss(x)));
+}
+#else
+float reciprocal_estimate_14(float x) {
+    return 1.0f / x;
+}
+#endif
+
 /// Embree's multiply-adds in the AVX2 kernels: one rounding each.
 struct FusedOps {
     static float madd(float a, float b, float c) { return std::fma(a, b, c); }    // a * b + c
     static float msub(float a, float b, float c) { return std::fma(a, b, -c); }   // a * b - c
     static float nmadd(float a, float b, float c) { return std::fma(-a, b, c); }  // c - a * b
+    static float estimate(float x) { return reciprocal_estimate_12(x); }
+};
+
+/// Embree's AVX-512 kernels: fused as AVX2's, with the 14-bit reciprocal estimate.
+struct FusedRcp14Ops : FusedOps {
+    static float estimate(float x) { return reciprocal_estimate_14(x); }
 };
 
 /// Embree's multiply-adds in the SSE and AVX kernels: the product rounds, then the sum.
@@ -30,6 +58,7 @@ struct SeparateOps {
     static float madd(float a, float b, float c) { return a * b + c; }
     static float msub(float a, float b, float c) { return a * b - c; }
     static float nmadd(float a, float b, float c) { return c - a * b; }
+    static float estimate(float x) { return reciprocal_estimate_12(x); }
 };
 
 template <typename Ops>
@@ -43,17 +72,13 @@ float kernel_dot(Vec3f a, Vec3f b) {
     return Ops::madd(a.x, b.x, Ops::madd(a.y, b.y, a.z * b.z));
 }
 
-/// 1 / x as Embree's kernels compute it: the hardware estimate (12 bits) refined by one
-/// Newton step. The estimate's table is the CPU's own, so on the same machine the result is
-/// bit for bit Embree's.
+/// 1 / x as Embree's kernels compute it: the hardware estimate refined by one Newton step,
+/// r + r * (1 - x * r). The estimate's table is the CPU's own, so on the same machine the
+/// result is bit for bit Embree's.
 template <typename Ops>
 float kernel_reciprocal(float x) {
-#if defined(REBRAID_HAS_SSE_RCP)
-    const float estimate = _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(x)));
+    const float estimate = Ops::estimate(x);
     return Ops::madd(estimate, Ops::nmadd(x, estimate, 1.0f), estimate);
-#else
-    return 1.0f / x;
-#endif
 }
 
 template <typename Ops>
@@ -117,6 +142,10 @@ std::optional<EmbreeHitAttributes> hit_attributes(const Ray& world_ray,
 
 EmbreeKernelArithmetic detect_embree_kernel_arithmetic() {
 #if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
+        __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+        __builtin_cpu_supports("avx512vl"))
+        return EmbreeKernelArithmetic::fused_rcp14;
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
         return EmbreeKernelArithmetic::fused;
 #endif
@@ -153,6 +182,8 @@ std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
                                                          const AffineTransform* world_to_object,
                                                          const std::array<Vec3f, 3>& corners,
                                                          EmbreeKernelArithmetic arithmetic) {
+    if (arithmetic == EmbreeKernelArithmetic::fused_rcp14)
+        return hit_attributes<FusedRcp14Ops>(world_ray, world_to_object, corners);
     if (arithmetic == EmbreeKernelArithmetic::fused)
         return hit_attributes<FusedOps>(world_ray, world_to_object, corners);
     return hit_attributes<SeparateOps>(world_ray, world_to_object, corners);

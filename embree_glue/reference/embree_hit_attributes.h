@@ -11,15 +11,19 @@ namespace rebraid::glue {
 
 /// How Embree's ray kernels round on this machine. Embree 3.13 runs the kernels of the best
 /// instruction set the CPU has: with AVX2 (and FMA) its multiply-adds are fused, with SSE or
-/// AVX they round the product and the sum separately. Both were measured bit for bit against
-/// rtcIntersect1 (dropin_results.md).
+/// AVX they round the product and the sum separately, and its AVX-512 kernels start the
+/// reciprocal from the 14-bit estimate (rcp14) rather than the 12-bit one. Each is tested bit
+/// for bit against rtcIntersect1 where the CPU runs it (EmbreeHitAttributes tests).
 enum class EmbreeKernelArithmetic {
-    separate,  ///< SSE4.2 and AVX kernels: a * b + c rounds twice
-    fused,     ///< AVX2 and AVX-512 kernels: a * b + c is one fused multiply-add
+    separate,     ///< SSE4.2 and AVX kernels: a * b + c rounds twice
+    fused,        ///< AVX2 kernels: a * b + c is one fused multiply-add
+    fused_rcp14,  ///< AVX-512 kernels: fused, and the reciprocal starts from rcp14
 };
 
-/// The arithmetic of the kernels a default Embree device selects on this CPU (fused when the
-/// CPU has AVX2 and FMA). A device created with an "isa=" configuration may select others.
+/// The arithmetic of the kernels a default Embree device selects on this CPU: fused_rcp14
+/// with the AVX-512 subsets Embree's AVX-512 kernels need (F, CD, DQ, BW, VL), fused with
+/// AVX2 and FMA, else separate. A device created with an "isa=" configuration may select
+/// others.
 EmbreeKernelArithmetic detect_embree_kernel_arithmetic();
 
 /// An instance's world-to-object map as Embree computes it from the float transform the

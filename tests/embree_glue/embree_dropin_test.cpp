@@ -140,10 +140,14 @@ void expect_bit_identical_attributes(const char* device_config,
 }
 
 TEST(EmbreeHitAttributes, ReproduceEmbreesDefaultKernelsBitForBit) {
-    // AVX-512 kernels take a more precise reciprocal estimate than this reproduction.
-    if (__builtin_cpu_supports("avx512f"))
-        GTEST_SKIP() << "Embree runs its AVX-512 kernels on this CPU";
+    // The kernels a default device picks on this CPU: AVX-512 ones where it has them.
     expect_bit_identical_attributes(nullptr, glue::detect_embree_kernel_arithmetic());
+}
+
+TEST(EmbreeHitAttributes, ReproduceEmbreesAvx2KernelsBitForBit) {
+    if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma"))
+        GTEST_SKIP() << "no AVX2 and FMA on this CPU";
+    expect_bit_identical_attributes("isa=avx2", glue::EmbreeKernelArithmetic::fused);
 }
 
 TEST(EmbreeHitAttributes, ReproduceEmbreesSse42KernelsBitForBit) {
