@@ -157,7 +157,7 @@ TEST(DynamicFrames, EmbreeMethodsMatchEmbreeFlatBuiltFromScratch) {
 
 TEST(DynamicFrames, RigidlyMovingGltfInstancesMatchEmbreeFlat) {
     const std::string path = std::string(REBRAID_SHARED_SCENES) + "/motion_capture_rom.glb";
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is missing";
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing";
     const auto object = load_gltf_animated_object(path);
     ASSERT_FALSE(object->moving_instances().empty());
     DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});

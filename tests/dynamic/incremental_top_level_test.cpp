@@ -79,7 +79,7 @@ TEST(IncrementalTopLevel, MatchesEmbreeFlatOnTheDeformedFrameForEveryStrategy) {
 
 TEST(IncrementalTopLevel, MatchesEmbreeFlatWithRigidlyMovingGltfParts) {
     const std::string path = std::string(REBRAID_SHARED_SCENES) + "/motion_capture_rom.glb";
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is missing";
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing";
     const auto object = load_gltf_animated_object(path);
     DynamicScene dynamic(static_scene(), *object, {.copy_count = 2});
     ASSERT_FALSE(dynamic.moving_instances().empty());

@@ -570,7 +570,7 @@ class AnimatedSharedScene : public testing::TestWithParam<const char*> {};
 
 TEST_P(AnimatedSharedScene, PosesAreFiniteChangingAndRepeatable) {
     const std::string path = shared_scene(GetParam());
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " missing";
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing";
     const GltfLoadResult loaded = load_animated(path);
     const GltfAnimator animator(loaded, {.file_label = path});
     ASSERT_TRUE(animator.animated());
@@ -602,7 +602,7 @@ INSTANTIATE_TEST_SUITE_P(Files, AnimatedSharedScene,
 TEST(GltfAnimationSharedScenes, MorphCubeStartsAtItsBaseMesh) {
     // The file's weights are (0, 0) both as mesh default and at its first key.
     const std::string path = shared_scene("animated_morph_cube.glb");
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " missing";
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing";
     const GltfLoadResult loaded = load_animated(path);
     const GltfAnimator animator(loaded);
     EXPECT_EQ(animator.deformed_meshes(), std::vector<MeshId>{0});
@@ -618,7 +618,7 @@ TEST(GltfAnimationSharedScenes, MotionCaptureFrameZeroIsNearTheRestPose) {
     // in scene units; the scene is ~95 units across) and 6e-5 (quaternion components): posing
     // at 0 s must land near the loaded transforms. All 26 mesh nodes lie below animated nodes.
     const std::string path = shared_scene("motion_capture_rom.glb");
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " missing";
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing";
     const GltfLoadResult loaded = load_animated(path);
     const GltfAnimator animator(loaded);
     EXPECT_EQ(animator.moving_instances().size(), 26u);
@@ -638,7 +638,7 @@ TEST(GltfAnimationSharedScenes, MotionCaptureFrameZeroIsNearTheRestPose) {
 TEST(GltfAnimationSharedScenes, BrainstemIsSkinnedInWorldSpace) {
     // 59 skinned nodes, one mesh each, every skin with an animated joint.
     const std::string path = shared_scene("brainstem.glb");
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " missing";
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing";
     const GltfLoadResult loaded = load_animated(path);
     const GltfAnimator animator(loaded);
     EXPECT_EQ(animator.deformed_meshes().size(), 59u);
@@ -676,7 +676,7 @@ TEST(GltfAnimationSharedScenes, BrainstemMatchesAnIndependentSkinning) {
         {30, 200, {0.004673f, 1.136904f, -0.058093f}},
     };
     const std::string path = shared_scene("brainstem.glb");
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " missing";
+    ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing";
     const GltfLoadResult loaded = load_animated(path);
     const GltfAnimator animator(loaded);
     Scene scene = loaded.scene;
