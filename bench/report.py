@@ -440,6 +440,16 @@ def section_frames(runs):
 
 # ---------------------------------------------------------------- plots
 
+def save_figure(plt, figure, axis, folder, name, caption):
+    """Writes `figure` (with its legend) to folder/name, deterministically (no software tag),
+    and returns the Markdown that shows it."""
+    axis.legend(fontsize="small")
+    figure.tight_layout()
+    figure.savefig(os.path.join(folder, name), dpi=100, metadata={"Software": None})
+    plt.close(figure)
+    return f"![{caption}]({name})\n"
+
+
 def draw_plots(out_file, scene_runs, frame_runs):
     """Figures beside `out_file`; returns their Markdown links ([] without matplotlib)."""
     try:
@@ -468,12 +478,8 @@ def draw_plots(out_file, scene_runs, frame_runs):
         axis.set_ylabel("diffuse Mrays/s / embree-flat's")
         axis.set_title("Diffuse-ray throughput relative to Embree's flat BVH (median of rounds)")
         axis.grid(axis="y", alpha=0.3)
-        axis.legend(fontsize="small")
-        figure.tight_layout()
-        name = f"{stem}-diffuse.png"
-        figure.savefig(os.path.join(folder, name), dpi=100, metadata={"Software": None})
-        plt.close(figure)
-        links["scenes"] = f"![Diffuse-ray throughput relative to embree-flat]({name})\n"
+        links["scenes"] = save_figure(plt, figure, axis, folder, f"{stem}-diffuse.png",
+                                      "Diffuse-ray throughput relative to embree-flat")
     for run in frame_runs:
         methods = run.names("method")
         parts = [("mean_animation_ms", "animation"), ("mean_update_ms", "update"),
@@ -498,12 +504,8 @@ def draw_plots(out_file, scene_runs, frame_runs):
         axis.set_xlabel("mean frame ms (median of rounds)")
         axis.set_title(f"Frame time: {run.name}")
         axis.grid(axis="x", alpha=0.3)
-        axis.legend(fontsize="small")
-        figure.tight_layout()
-        name = f"{stem}-frames-{run.name}.png"
-        figure.savefig(os.path.join(folder, name), dpi=100, metadata={"Software": None})
-        plt.close(figure)
-        links[run.name] = f"![Frame time of {run.name}]({name})\n"
+        links[run.name] = save_figure(plt, figure, axis, folder,
+                                      f"{stem}-frames-{run.name}.png", f"Frame time of {run.name}")
     return links
 
 

@@ -28,6 +28,9 @@ case "$mode" in
     *) echo "usage: bash scripts/run-sanitizer-tests.sh [asan|asan-ci|tsan]" >&2; exit 2 ;;
 esac
 build="${REBRAID_SANITIZER_BUILD:-build-$preset}"
+# The asan-ci subset holds at least this many tests (tests/CMakeLists.txt, label `asan`);
+# fewer means tests went missing, which fails the run.
+min_asan_ci_tests=240
 jobs="$(nproc)"
 bash scripts/install-deps.sh
 
@@ -68,12 +71,22 @@ case "$mode" in
     asan)
         cmake --preset asan -B "$build" >/dev/null
         cmake --build "$build" --parallel "$jobs"
-        ctest --test-dir "$build" --output-on-failure --parallel "$jobs" -LE 'slow|install'
+        ctest --test-dir "$build" --output-on-failure --parallel "$jobs" -LE 'slow|install' \
+            --no-tests=error
         ;;
     asan-ci)
         cmake --preset asan -B "$build" >/dev/null
         cmake --build "$build" --parallel "$jobs" --target asan_ci_tests
-        ctest --test-dir "$build" --output-on-failure --parallel "$jobs" -L asan -LE slow
+        # A label that matches nothing, or executables whose tests were not discovered, must
+        # fail rather than pass with nothing run.
+        listed="$(ctest --test-dir "$build" -N -L asan -LE slow | sed -n 's/^Total Tests: //p')"
+        if [ "${listed:-0}" -lt "$min_asan_ci_tests" ]; then
+            echo "run-sanitizer-tests.sh: only ${listed:-0} tests labelled asan" \
+                 "(expected at least $min_asan_ci_tests)" >&2
+            exit 1
+        fi
+        ctest --test-dir "$build" --output-on-failure --parallel "$jobs" -L asan -LE slow \
+            --no-tests=error
         ;;
     tsan)
         mkdir -p "$build"
@@ -95,6 +108,6 @@ case "$mode" in
         embree_and_own='^AnimateCommand\.(JsonHasOneObjectPerMethodWithTheSummaryKeys|PlotWritesAPng)$'
         LD_LIBRARY_PATH="$tbb/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" \
             ctest --test-dir "$build" --output-on-failure --parallel "$jobs" -L tsan \
-            -LE 'slow|memory' -E "$large_scenes|$embree_and_own"
+            -LE 'slow|memory' -E "$large_scenes|$embree_and_own" --no-tests=error
         ;;
 esac
