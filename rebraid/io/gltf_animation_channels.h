@@ -1,6 +1,6 @@
 #pragma once
 
-// Keyframe tracks and channels of glTF animations (internal to rebraid::gltf): reading them
+// Keyframe tracks and channels of glTF animations (internal to rebraid::io): reading them
 // from a parsed document with every check the animator promises, and sampling them at a time
 // per the glTF 2.0 specification (appendix "Interpolation").
 

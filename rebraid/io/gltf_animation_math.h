@@ -1,6 +1,6 @@
 #pragma once
 
-// Double-precision node math of the glTF animator (internal to rebraid::gltf): TRS poses,
+// Double-precision node math of the glTF animator (internal to rebraid::io): TRS poses,
 // quaternions and affine maps. Node chains are composed in double, like the loader does, and
 // converted to float once per instance or joint.
 

@@ -1,6 +1,6 @@
 #pragma once
 
-// The glTF node forest as the animator needs it (internal to rebraid::gltf): parents, a
+// The glTF node forest as the animator needs it (internal to rebraid::io): parents, a
 // parents-first order, rest poses and rest world transforms in double.
 
 #include <cstdint>

@@ -1,7 +1,7 @@
 #pragma once
 
 // Reading animation, skin and morph accessors of a parsed glTF document into plain arrays
-// (internal to rebraid::gltf). Every read goes through resolve_gltf_accessor(), so a file
+// (internal to rebraid::io). Every read goes through resolve_gltf_accessor(), so a file
 // cannot make these functions read outside its buffers.
 
 #include <cstdint>

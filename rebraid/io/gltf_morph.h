@@ -1,6 +1,6 @@
 #pragma once
 
-// glTF morph targets (internal to rebraid::gltf): POSITION deltas of one Mesh and the
+// glTF morph targets (internal to rebraid::io): POSITION deltas of one Mesh and the
 // weighted sum that morphs a vertex. Other target attributes (NORMAL, TANGENT) are ignored:
 // the scene model holds positions only.
 

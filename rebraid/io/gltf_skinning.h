@@ -1,6 +1,6 @@
 #pragma once
 
-// glTF skins (internal to rebraid::gltf): joints with inverse bind matrices, per-vertex joint
+// glTF skins (internal to rebraid::io): joints with inverse bind matrices, per-vertex joint
 // influences (JOINTS_n / WEIGHTS_n), and linear blend skinning of one vertex.
 
 #include <cstddef>

@@ -18,25 +18,6 @@
 
 namespace rebraid::test {
 
-/// A point in double precision: world-space vertices are computed exactly enough that a float
-/// box holding them holds the float rounding of them too.
-struct WorldPoint {
-    double x, y, z;
-};
-
-inline WorldPoint to_world_exact(const AffineTransform& xfm, Vec3f p) {
-    const auto row = [&](int axis) {
-        return double(xfm.col_x[axis]) * p.x + double(xfm.col_y[axis]) * p.y +
-               double(xfm.col_z[axis]) * p.z + double(xfm.translation[axis]);
-    };
-    return {row(0), row(1), row(2)};
-}
-
-inline bool box_holds(const BBox3f& box, const WorldPoint& p) {
-    return box.min.x <= p.x && p.x <= box.max.x && box.min.y <= p.y && p.y <= box.max.y &&
-           box.min.z <= p.z && p.z <= box.max.z;
-}
-
 inline bool box_holds(const BBox3f& outer, const BBox3f& inner) {
     return outer.min.x <= inner.min.x && inner.max.x <= outer.max.x && outer.min.y <= inner.min.y &&
            inner.max.y <= outer.max.y && outer.min.z <= inner.min.z && inner.max.z <= outer.max.z;
@@ -62,7 +43,8 @@ void for_each_corner_below(const ObjectBvh& bvh, NodeRef ref, Visit&& visit) {
 /// Walks the whole top level of `accel`: each inner slot's box holds the boxes of the node it
 /// points to, each leaf slot's box holds every world-space corner of every triangle below
 /// every item of the leaf (exactly: no tolerance, the corners rounded as the builders'
-/// transform_point rounds them). Reports the first few violations; returns how many boxes were checked.
+/// transform_point rounds them). Reports the first few violations; returns how many boxes were
+/// checked.
 inline std::size_t expect_boxes_enclose_geometry(const Scene& scene, const InstancedAccel& accel,
                                                  const std::string& what) {
     const TopLevelBvh& top = accel.top_level();
@@ -84,14 +66,13 @@ inline std::size_t expect_boxes_enclose_geometry(const Scene& scene, const Insta
             for (int slot = 0; slot < kBvhWidth && !node.children[slot].is_empty(); ++slot) {
                 const BBox3f child_box = node.child_bounds(slot);
                 if (!box_holds(box, child_box)) {
-                    const float excess = std::max(
-                        {box.min.x - child_box.min.x, child_box.max.x - box.max.x,
-                         box.min.y - child_box.min.y, child_box.max.y - box.max.y,
-                         box.min.z - child_box.min.z, child_box.max.z - box.max.z});
-                    fail("node " + std::to_string(ref.node_id()) + " slot " +
-                         std::to_string(slot) + ": box " + std::to_string(excess) +
-                         " outside its parent's (extent " + std::to_string(length(box.extent())) +
-                         ")");
+                    const float excess =
+                        std::max({box.min.x - child_box.min.x, child_box.max.x - box.max.x,
+                                  box.min.y - child_box.min.y, child_box.max.y - box.max.y,
+                                  box.min.z - child_box.min.z, child_box.max.z - box.max.z});
+                    fail("node " + std::to_string(ref.node_id()) + " slot " + std::to_string(slot) +
+                         ": box " + std::to_string(excess) + " outside its parent's (extent " +
+                         std::to_string(length(box.extent())) + ")");
                 }
                 pending.push_back({node.children[slot], child_box});
             }
@@ -101,14 +82,15 @@ inline std::size_t expect_boxes_enclose_geometry(const Scene& scene, const Insta
             const TopLevelItem& item = top.items[ref.first_prim() + i];
             const Instance& instance = scene.instances[item.instance_id];
             const ObjectBvh& bvh = accel.object_bvhs()[instance.mesh_id];
-            double excess = 0.0;  // farthest a corner lies outside the box
+            // Farthest a corner, rounded as the builders' transform_point rounds it, lies
+            // outside the box.
+            float excess = 0.0f;
             for_each_corner_below(bvh, item.object_node, [&](Vec3f corner) {
-                const Vec3f q = instance.object_to_world.transform_point(corner);
-                const WorldPoint p{q.x, q.y, q.z};
+                const Vec3f p = instance.object_to_world.transform_point(corner);
                 excess = std::max({excess, box.min.x - p.x, p.x - box.max.x, box.min.y - p.y,
                                    p.y - box.max.y, box.min.z - p.z, p.z - box.max.z});
             });
-            if (excess > 0.0)
+            if (excess > 0.0f)
                 fail("item " + std::to_string(ref.first_prim() + i) + " (instance " +
                      std::to_string(item.instance_id) + "): a world-space corner lies " +
                      std::to_string(excess) + " outside its leaf's box (extent " +
