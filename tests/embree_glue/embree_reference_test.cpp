@@ -20,6 +20,7 @@
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/generators/random_rays.h"
 #include "rebraid/io/gltf_scene.h"
+#include "support/hit_point.h"
 
 namespace rebraid::glue {
 namespace {
@@ -176,18 +177,7 @@ private:
     std::vector<WorldTriangle> triangles_;
 };
 
-/// Distance between the ray's point at hit.t and the point at barycentrics (u, v) on the
-/// triangle the hit names: small only when t, both ids, u and v all describe one point.
-float hit_point_error(const Scene& scene, const Ray& ray, const Hit& hit) {
-    if (hit.instance_id >= scene.instances.size()) return kInf;
-    const Instance& instance = scene.instances[hit.instance_id];
-    const Mesh& mesh = scene.meshes[instance.mesh_id];
-    if (hit.prim_id >= mesh.triangles.size()) return kInf;
-    const auto [p0, p1, p2] = mesh.corners(hit.prim_id);
-    const Vec3f on_triangle = instance.object_to_world.transform_point(p0 * (1.0f - hit.u - hit.v) +
-                                                                       p1 * hit.u + p2 * hit.v);
-    return length(ray.org + ray.dir * hit.t - on_triangle);
-}
+using test::hit_point_error;
 
 /// How two structures' answers on a batch of rays relate.
 struct Agreement {

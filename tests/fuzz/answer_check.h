@@ -19,6 +19,7 @@
 
 #include "rebraid/core/accel.h"
 #include "rebraid/core/scene.h"
+#include "support/hit_point.h"
 
 namespace rebraid::fuzz {
 
@@ -65,15 +66,7 @@ struct AnswerComparison {
 /// True when `hit`'s triangle, u and v name the point of the ray at hit.t (within 1e-4 of the
 /// scene's magnitude plus of the distance travelled): the triangle is really hit there.
 inline bool names_its_point(const Scene& scene, const Ray& ray, const Hit& hit, float magnitude) {
-    if (hit.instance_id >= scene.instances.size()) return false;
-    const Instance& instance = scene.instances[hit.instance_id];
-    const Mesh& mesh = scene.meshes[instance.mesh_id];
-    if (hit.prim_id >= mesh.triangles.size()) return false;
-    const std::array<Vec3f, 3> c = mesh.corners(hit.prim_id);
-    const Vec3f on_triangle = instance.object_to_world.transform_point(
-        c[0] * (1.0f - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v);
-    const Vec3f travelled = ray.dir * hit.t;
-    return length(ray.org + travelled - on_triangle) <= 1e-4f * (magnitude + length(travelled));
+    return test::hit_point_error(scene, ray, hit) <= 1e-4f * (magnitude + length(ray.dir * hit.t));
 }
 
 /// Compares `candidate` with `reference` ray by ray (closest hit and occlusion) within

@@ -11,7 +11,7 @@ set(REBRAID_FUZZ_DIR ${CMAKE_CURRENT_LIST_DIR})
 function(rebraid_add_fuzz_replay target executable test)
     add_executable(${executable} ${REBRAID_FUZZ_DIR}/fuzz_${target}.cpp
                                  ${REBRAID_FUZZ_DIR}/replay_main.cpp)
-    target_include_directories(${executable} PRIVATE ${REBRAID_FUZZ_DIR})
+    target_include_directories(${executable} PRIVATE ${REBRAID_FUZZ_DIR} ${REBRAID_FUZZ_DIR}/..)
     target_link_libraries(${executable} PRIVATE rebraid::rebraid rebraid::embree_glue
                                                 rebraid_warnings)
     set(inputs "")

@@ -18,11 +18,6 @@
 
 namespace rebraid::test {
 
-inline bool box_holds(const BBox3f& outer, const BBox3f& inner) {
-    return outer.min.x <= inner.min.x && inner.max.x <= outer.max.x && outer.min.y <= inner.min.y &&
-           inner.max.y <= outer.max.y && outer.min.z <= inner.min.z && inner.max.z <= outer.max.z;
-}
-
 /// Calls `visit(corner)` for every corner of every triangle below `ref` of `bvh`.
 template <class Visit>
 void for_each_corner_below(const ObjectBvh& bvh, NodeRef ref, Visit&& visit) {
@@ -65,7 +60,7 @@ inline std::size_t expect_boxes_enclose_geometry(const Scene& scene, const Insta
             const WideNode& node = top.nodes[ref.node_id()];
             for (int slot = 0; slot < kBvhWidth && !node.children[slot].is_empty(); ++slot) {
                 const BBox3f child_box = node.child_bounds(slot);
-                if (!box_holds(box, child_box)) {
+                if (!box.contains(child_box)) {
                     const float excess =
                         std::max({box.min.x - child_box.min.x, child_box.max.x - box.max.x,
                                   box.min.y - child_box.min.y, child_box.max.y - box.max.y,

@@ -17,6 +17,7 @@
 #include "rebraid/core/accel.h"
 #include "rebraid/core/bbox.h"
 #include "rebraid/core/scene.h"
+#include "support/hit_point.h"
 
 namespace rebraid::test {
 
@@ -92,19 +93,11 @@ inline bool hits_sliver(const Scene& scene, const Hit& hit, const Tolerance& tol
 /// travelled): the triangle a hit names is really hit there.
 inline bool hit_names_its_point(const Scene& scene, const Ray& ray, const Hit& hit,
                                 const Tolerance& tolerance) {
-    if (hit.instance_id >= scene.instances.size()) return false;
-    const Instance& instance = scene.instances[hit.instance_id];
-    const Mesh& mesh = scene.meshes[instance.mesh_id];
-    if (hit.prim_id >= mesh.triangles.size()) return false;
     if (!(hit.u >= -tolerance.edge_graze && hit.v >= -tolerance.edge_graze &&
           hit.u + hit.v <= 1.0f + tolerance.edge_graze))
         return false;
-    const auto [p0, p1, p2] = mesh.corners(hit.prim_id);
-    const Vec3f on_triangle = instance.object_to_world.transform_point(p0 * (1.0f - hit.u - hit.v) +
-                                                                       p1 * hit.u + p2 * hit.v);
-    const Vec3f travelled = ray.dir * hit.t;
-    const float error = length(ray.org + travelled - on_triangle);
-    return error <= 1e-5f * (tolerance.scene_magnitude + length(travelled));
+    return hit_point_error(scene, ray, hit) <=
+           1e-5f * (tolerance.scene_magnitude + length(ray.dir * hit.t));
 }
 
 /// What a comparison of two structures' answers found.
