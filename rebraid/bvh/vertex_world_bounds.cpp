@@ -26,7 +26,15 @@ float box_bound(const BBox3f& box, Vec3f d) {
 struct Support {
     float best = -std::numeric_limits<float>::infinity();
     float skipped = -std::numeric_limits<float>::infinity();
+    Vec3f best_vertex{};
     float value() const { return std::max(best, skipped); }
+    void offer(Vec3f d, Vec3f vertex) {
+        const float projection = project(d, vertex);
+        if (projection > best) {
+            best = projection;
+            best_vertex = vertex;
+        }
+    }
 };
 
 /// Raises `support` over the vertices of the triangles under `ref` along `d`, skipping
@@ -38,8 +46,9 @@ void raise_support(const ObjectBvh& bvh, NodeRef ref, Vec3f d, float slack, Supp
         const std::uint32_t first = ref.first_prim();
         for (std::uint32_t i = first; i < first + ref.prim_count(); ++i) {
             const TriangleVerts& t = bvh.triangles[i];
-            support.best =
-                std::max({support.best, project(d, t.v0), project(d, t.v1), project(d, t.v2)});
+            support.offer(d, t.v0);
+            support.offer(d, t.v1);
+            support.offer(d, t.v2);
         }
         return;
     }
@@ -67,6 +76,14 @@ float max_abs(Vec3f v) {
 }
 
 }  // namespace
+
+VertexSupport vertex_support(const ObjectBvh& bvh, NodeRef node, Vec3f direction, float slack,
+                             const Vec3f* start) {
+    Support support;
+    if (start) support.offer(direction, *start);
+    raise_support(bvh, node, direction, slack, support);
+    return {support.value(), support.best_vertex};
+}
 
 BBox3f vertex_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
                            const AffineTransform& to_world, float tolerance) {

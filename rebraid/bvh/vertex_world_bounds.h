@@ -23,4 +23,16 @@ namespace rebraid {
 BBox3f vertex_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
                            const AffineTransform& to_world, float tolerance = 0.01f);
 
+/// One support value of that search: `value` is the largest `direction` · v over the vertices
+/// of the triangles under `node`, or a bound at most `slack` above it (never below it, up to
+/// the rounding of the projections); -infinity for an empty node. `vertex` is the vertex of
+/// largest projection the search met. `start`, when given, must be one of those vertices:
+/// starting from a good one (the answer for a nearby direction) prunes most of the search.
+struct VertexSupport {
+    float value;
+    Vec3f vertex;
+};
+VertexSupport vertex_support(const ObjectBvh& bvh, NodeRef node, Vec3f direction, float slack,
+                             const Vec3f* start = nullptr);
+
 }  // namespace rebraid

@@ -33,13 +33,18 @@ BBox3f transformed_leaf_bounds(const ObjectBvh& bvh, NodeRef leaf,
 }  // namespace
 
 BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
-                         const AffineTransform& to_world, BRefBoundsRule rule) {
+                         const AffineTransform& to_world, BRefBoundsRule rule,
+                         const ObjectSupportTables* tables) {
     if (rule == BRefBoundsRule::transformed_box || node.is_empty() ||
         to_world == AffineTransform::identity())
         return to_world.transform_bbox_conservative(node_box);
     if (node.is_leaf()) return transformed_leaf_bounds(bvh, node, to_world);
-    if (rule == BRefBoundsRule::transformed_vertices)
+    if (rule == BRefBoundsRule::transformed_vertices) {
+        if (const SupportTable* table = tables ? tables->find(node) : nullptr)
+            return intersection(table->world_bounds(to_world, bvh, node),
+                                to_world.transform_bbox_conservative(node_box));
         return vertex_world_bounds(bvh, node, node_box, to_world);
+    }
     const WideNode& wide = bvh.nodes[node.node_id()];
     BBox3f box;
     for (int c = 0; c < kBvhWidth && !wide.children[c].is_empty(); ++c)

@@ -1,6 +1,7 @@
 #pragma once
 
 #include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/object_support_tables.h"
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/bbox.h"
 #include "rebraid/core/transform.h"
@@ -27,7 +28,10 @@ enum class BRefBoundsRule {
 
 /// World-space bounds of the BRef to `node` of `bvh` placed by `to_world`; `node_box` is the
 /// node's object-space box (as its parent stores it, or the BVH's bounds for the root).
+/// Under transformed_vertices, a node with a table in `tables` takes its box from the table
+/// (as tight, mostly without searching the BVH, and never wider than transformed_box's).
 BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
-                         const AffineTransform& to_world, BRefBoundsRule rule);
+                         const AffineTransform& to_world, BRefBoundsRule rule,
+                         const ObjectSupportTables* tables = nullptr);
 
 }  // namespace rebraid

@@ -10,6 +10,7 @@
 #include "rebraid/core/transform.h"
 #include "rebraid/rebraiding/bref.h"
 #include "rebraid/rebraiding/bref_bounds.h"
+#include "rebraid/rebraiding/bref_child_bounds.h"
 
 namespace rebraid {
 
@@ -30,9 +31,21 @@ struct BRefSource {
     /// of that cost over the BRefs opened in the slot. Written by open_brefs when not empty.
     std::span<double> node_cost;
     std::span<double> removed_cost;
+    /// Optional, per mesh: support tables for the world boxes of its top nodes (empty: none).
+    std::span<const ObjectSupportTables> support_tables;
+    /// Optional: the children's world boxes of BRefs to inner nodes, computed once per BRef.
+    BRefChildBounds* child_bounds = nullptr;
 
     const ObjectBvh& bvh_of(const BRefTarget& target) const {
         return object_bvhs[instance_mesh[target.instance_id]];
+    }
+    /// The world box of a BRef to `node` (whose object box is `node_box`) of the instance of
+    /// `target`, by the bounds rule.
+    BBox3f world_bounds(const BRefTarget& target, NodeRef node, const BBox3f& node_box) const {
+        const std::uint32_t mesh = instance_mesh[target.instance_id];
+        return bref_world_bounds(object_bvhs[mesh], node, node_box,
+                                 object_to_world[target.instance_id], bounds_rule,
+                                 support_tables.empty() ? nullptr : &support_tables[mesh]);
     }
     bool has_exact_counts() const { return subtree_counts != nullptr; }
     bool is_tracking_costs() const { return !node_cost.empty(); }
@@ -73,6 +86,31 @@ void for_each_bref_child(const BRefSource& source, const BRefTarget& target, Vis
     const WideNode& wide = bvh.nodes[node.node_id()];
     for (int c = 0; c < kBvhWidth && !wide.children[c].is_empty(); ++c)
         visit(wide.children[c], wide.child_bounds(c));
+}
+
+/// for_each_bref_child with each child's world box: visit(child, object_box, world_box).
+/// `slot` is `target`'s slot; the boxes of an inner node's children come from
+/// source.child_bounds when set (computed there on first use).
+template <class Visit>
+void for_each_bref_child_bounds(const BRefSource& source, std::uint32_t slot,
+                                const BRefTarget& target, Visit&& visit) {
+    const NodeRef node = target.object_node;
+    if (node.is_leaf() || !source.child_bounds) {
+        for_each_bref_child(source, target, [&](NodeRef child, const BBox3f& box) {
+            visit(child, box, source.world_bounds(target, child, box));
+        });
+        return;
+    }
+    const WideNode& wide = source.bvh_of(target).nodes[node.node_id()];
+    const BRefChildBounds::Boxes* boxes = source.child_bounds->find(slot, target);
+    if (!boxes) {
+        BRefChildBounds::Boxes computed;
+        for (int c = 0; c < kBvhWidth && !wide.children[c].is_empty(); ++c)
+            computed[c] = source.world_bounds(target, wide.children[c], wide.child_bounds(c));
+        boxes = &source.child_bounds->store(slot, target, computed);
+    }
+    for (int c = 0; c < kBvhWidth && !wide.children[c].is_empty(); ++c)
+        visit(wide.children[c], wide.child_bounds(c), (*boxes)[c]);
 }
 
 /// Triangles below `node` of the BVH of `target`'s instance, from source.subtree_counts

@@ -54,7 +54,6 @@ void open_one(std::uint32_t parent_index, std::uint64_t offset, std::uint32_t ex
               const BRefSource& source) {
     BuildPrim& parent = prims[parent_index];
     const BRefTarget parent_target = targets[parent.id];
-    const ObjectBvh& bvh = source.bvh_of(parent_target);
     const AffineTransform& to_world = source.object_to_world[parent_target.instance_id];
     const std::uint32_t estimated_weight = std::max(1u, parent.weight / (extra + 1));
     if (source.is_tracking_costs()) {
@@ -62,29 +61,32 @@ void open_one(std::uint32_t parent_index, std::uint64_t offset, std::uint32_t ex
         source.removed_cost[parent.id] += source.node_cost[parent.id];
     }
     std::uint32_t c = 0;
-    for_each_bref_child(source, parent_target, [&](NodeRef child, const BBox3f& box) {
-        const BBox3f bounds = bref_world_bounds(bvh, child, box, to_world, source.bounds_rule);
-        const std::uint32_t weight =
-            source.has_exact_counts() ? std::max(1u, exact_prim_count(source, parent_target, child))
-                                      : estimated_weight;
-        const BRefTarget child_target{parent_target.instance_id, child};
-        const std::uint32_t child_slot =
-            c == 0 ? parent.id : segment.next_target + std::uint32_t(offset + c - 1);
-        if (source.is_tracking_costs())
-            source.node_cost[child_slot] =
-                parent_target.object_node.is_leaf()
-                    ? 0.0  // a triangle of an opened leaf: no object node of its own
-                    : mapped_box_half_area(box, to_world) *
-                          (child.is_leaf() ? child.prim_count() : 1.0);
-        if (c == 0) {  // the first child replaces its parent, keeping its target slot
-            parent = {bounds, parent.id, weight};
-            targets[parent.id] = child_target;
-        } else {
-            prims[segment.end + std::uint32_t(offset + c - 1)] = {bounds, child_slot, weight};
-            targets[child_slot] = child_target;
-        }
-        ++c;
-    });
+    const std::uint32_t parent_slot = parent.id;
+    for_each_bref_child_bounds(
+        source, parent_slot, parent_target,
+        [&](NodeRef child, const BBox3f& box, const BBox3f& bounds) {
+            const std::uint32_t weight =
+                source.has_exact_counts()
+                    ? std::max(1u, exact_prim_count(source, parent_target, child))
+                    : estimated_weight;
+            const BRefTarget child_target{parent_target.instance_id, child};
+            const std::uint32_t child_slot =
+                c == 0 ? parent.id : segment.next_target + std::uint32_t(offset + c - 1);
+            if (source.is_tracking_costs())
+                source.node_cost[child_slot] =
+                    parent_target.object_node.is_leaf()
+                        ? 0.0  // a triangle of an opened leaf: no object node of its own
+                        : mapped_box_half_area(box, to_world) *
+                              (child.is_leaf() ? child.prim_count() : 1.0);
+            if (c == 0) {  // the first child replaces its parent, keeping its target slot
+                parent = {bounds, parent.id, weight};
+                targets[parent.id] = child_target;
+            } else {
+                prims[segment.end + std::uint32_t(offset + c - 1)] = {bounds, child_slot, weight};
+                targets[child_slot] = child_target;
+            }
+            ++c;
+        });
 }
 
 /// open_brefs for segments below the parallel threshold: one pass, a running offset (the

@@ -1,6 +1,7 @@
 #include "rebraid/rebraiding/rebraid_builder.h"
 
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -15,10 +16,12 @@
 #include "rebraid/bvh/binned_split.h"
 #include "rebraid/bvh/fit_inner_boxes.h"
 #include "rebraid/bvh/object_subtree_counts.h"
+#include "rebraid/bvh/object_support_tables.h"
 #include "rebraid/bvh/wide_tree_grower.h"
-#include "rebraid/core/scratch_buffer.h"
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/error.h"
+#include "rebraid/core/parallel_blocks.h"
+#include "rebraid/core/scratch_buffer.h"
 #include "rebraid/rebraiding/bref.h"
 #include "rebraid/rebraiding/bref_budget.h"
 #include "rebraid/rebraiding/bref_opening.h"
@@ -174,6 +177,27 @@ private:
     // A statistic only: the sum is the same whatever order the tasks add in.
     mutable std::atomic<std::uint64_t> opened_{0};
 };
+
+/// Per mesh, the ObjectSupportTables of its BVH where the settings ask for vertex bounds and
+/// the mesh has support_table_instances `instances` or more (others: no tables); empty when
+/// no mesh has.
+std::vector<ObjectSupportTables> object_support_tables(std::span<const ObjectBvh> object_bvhs,
+                                                       std::span<const std::uint32_t> instance_mesh,
+                                                       std::span<const InstanceId> instances,
+                                                       const RebraidSettings& settings) {
+    if (settings.bounds_rule != BRefBoundsRule::transformed_vertices) return {};
+    std::vector<std::uint32_t> uses(object_bvhs.size(), 0);
+    for (const InstanceId i : instances) ++uses[instance_mesh[i]];
+    std::vector<std::uint32_t> meshes;
+    for (std::uint32_t mesh = 0; mesh < uses.size(); ++mesh)
+        if (uses[mesh] >= settings.support_table_instances) meshes.push_back(mesh);
+    if (meshes.empty()) return {};
+    std::vector<ObjectSupportTables> tables(object_bvhs.size());
+    tbb::parallel_for(std::size_t(0), meshes.size(), [&](std::size_t k) {
+        tables[meshes[k]] = ObjectSupportTables(object_bvhs[meshes[k]]);
+    });
+    return tables;
+}
 
 /// Leaves reference the BRef array with its unused free space in between; renumber them into
 /// a dense item list (in array order) and fill the top level's items.
@@ -339,33 +363,47 @@ TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> o
     const std::span<BRefTarget> targets = target_buffer.span();
     std::vector<double> node_cost(is_tracking_cost ? capacity : 0);
     std::vector<double> removed_cost(is_tracking_cost ? capacity : 0);
-    std::uint32_t n = 0;
-    for (const InstanceId i : instances) {
-        const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
-        if (bvh.root.is_empty()) continue;
-        // One BRef per instance at its object root, with the root's primitive count (§3.2).
-        prims[n] = {
-            bref_world_bounds(bvh, bvh.root, bvh.bounds, object_to_world[i], settings.bounds_rule),
-            n, bvh.prim_count()};
-        targets[n] = {InstanceId(i), bvh.root};
-        if (is_tracking_cost)
-            node_cost[n] = mapped_box_half_area(bvh.bounds, object_to_world[i]) *
-                           (bvh.root.is_leaf() ? bvh.root.prim_count() : 1.0);
-        ++n;
-    }
+    // One BRef per instance at its object root, with the root's primitive count (§3.2): the
+    // slots first, then the bounds in parallel.
+    std::vector<InstanceId> seeded;
+    seeded.reserve(seed_count);
+    for (const InstanceId i : instances)
+        if (!object_bvhs[instance_mesh[i]].root.is_empty()) seeded.push_back(i);
+    const auto n = std::uint32_t(seeded.size());
+    const std::vector<ObjectSupportTables> support_tables =
+        object_support_tables(object_bvhs, instance_mesh, seeded, settings);
+    BRefSource source{object_bvhs,   instance_mesh,        object_to_world, settings.bounds_rule,
+                      nullptr,       settings.open_leaves, node_cost,       removed_cost,
+                      support_tables};
+    auto seed = [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t slot = begin; slot < end; ++slot) {
+            const InstanceId i = seeded[slot];
+            const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
+            const AffineTransform& to_world = object_to_world[i];
+            targets[slot] = {i, bvh.root};
+            prims[slot] = {source.world_bounds(targets[slot], bvh.root, bvh.bounds),
+                           std::uint32_t(slot), bvh.prim_count()};
+            if (is_tracking_cost)
+                node_cost[slot] = mapped_box_half_area(bvh.bounds, to_world) *
+                                  (bvh.root.is_leaf() ? bvh.root.prim_count() : 1.0);
+        }
+    };
+    if (n < settings.build.parallel_threshold)
+        seed(0, 0, n);
+    else
+        for_each_block(n, seed);
 
     // The paper's rule estimates child counts (§5.3); the others use the real ones, counted
     // for the meshes whose BRefs open.
     std::optional<LazySubtreeCounts> subtree_counts;
-    if (settings.opening_rule != OpeningRule::extent) subtree_counts.emplace(object_bvhs);
-    const BRefSource source{object_bvhs,
-                            instance_mesh,
-                            object_to_world,
-                            settings.bounds_rule,
-                            subtree_counts ? &*subtree_counts : nullptr,
-                            settings.open_leaves,
-                            node_cost,
-                            removed_cost};
+    std::optional<BRefChildBounds> child_bounds;
+    if (settings.opening_rule != OpeningRule::extent) {
+        subtree_counts.emplace(object_bvhs);
+        source.subtree_counts = &*subtree_counts;
+        // The SAH-aware rules ask for a candidate's children at each level it is one.
+        child_bounds.emplace(capacity);
+        source.child_bounds = &*child_bounds;
+    }
     const RebraidPolicy policy(prims, scratch_buffer.span(), targets, source, settings);
     const std::size_t threshold = settings.build.parallel_threshold;
     const RebraidCandidate root =

@@ -72,6 +72,12 @@ struct RebraidSettings {
     /// (§5.4), the tighter union of transformed children, or the box of the transformed
     /// vertices (bref_bounds.h).
     BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_vertices;
+    /// BRefBoundsRule::transformed_vertices: a mesh with at least this many instances in the
+    /// build gets support tables (object_support_tables.h) for its root and the root's
+    /// children, so that its BRefs' boxes cost a few table lookups rather than searches of
+    /// its BVH. A table costs about 80 such searches and is a little looser (the tables'
+    /// bound, against 1 % of the extent), so it pays for meshes of many instances.
+    std::uint32_t support_table_instances = 512;
     /// Which BRefs are opened (see OpeningRule).
     OpeningRule opening_rule = OpeningRule::sah;
     /// Also open BRefs to object-BVH leaves of several triangles, into one BRef per triangle

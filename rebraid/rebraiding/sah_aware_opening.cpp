@@ -108,22 +108,21 @@ OpeningEstimate estimate_opening(std::span<const BuildPrim> prims,
             } else {
                 offset += extra;
                 ++estimate.opened;
-                const ObjectBvh& bvh = source.bvh_of(target);
                 const AffineTransform& to_world = source.object_to_world[target.instance_id];
                 const NodeRef node = target.object_node;
                 const double area = prim.bounds.half_area();
                 closed_items +=
                     area * (node.is_leaf() ? node.prim_count() : 1.0) + entry_cost * area;
-                for_each_bref_child(source, target, [&](NodeRef child, const BBox3f& box) {
-                    const BBox3f bounds =
-                        bref_world_bounds(bvh, child, box, to_world, source.bounds_rule);
-                    const double tests = child.is_leaf() ? child.prim_count() : 1.0;
-                    if (node.is_inner())
-                        closed_items += mapped_box_half_area(box, to_world) * tests;
-                    const double child_area = bounds.half_area();
-                    opened_items += child_area * tests + entry_cost * child_area;
-                    opened.push_back({bounds, 0, 1});
-                });
+                for_each_bref_child_bounds(
+                    source, prim.id, target,
+                    [&](NodeRef child, const BBox3f& box, const BBox3f& bounds) {
+                        const double tests = child.is_leaf() ? child.prim_count() : 1.0;
+                        if (node.is_inner())
+                            closed_items += mapped_box_half_area(box, to_world) * tests;
+                        const double child_area = bounds.half_area();
+                        opened_items += child_area * tests + entry_cost * child_area;
+                        opened.push_back({bounds, 0, 1});
+                    });
                 continue;
             }
         }

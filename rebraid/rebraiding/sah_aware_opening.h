@@ -19,8 +19,8 @@ struct OpeningEstimate {
     bool lowers_sah() const { return opened > 0 && opened_cost < closed_cost; }
 };
 
-/// SAH-aware opening (beyond the paper): the paper opens every BRef its criterion picks (§4.2); this
-/// estimates whether doing so lowers the segment's SAH, without writing anything.
+/// SAH-aware opening (beyond the paper): the paper opens every BRef its criterion picks (§4.2);
+/// this estimates whether doing so lowers the segment's SAH, without writing anything.
 ///
 /// The estimate has two parts, each the same for both sides except where opening changes it:
 ///  - the BRefs themselves, exactly: a closed BRef to an inner node costs its world box (the

@@ -62,6 +62,11 @@ std::vector<NamedSettings> settings_variants() {
              s.bounds_rule = BRefBoundsRule::transformed_children;
          })},
         {"default", {}},
+        {"default-tables", [] {
+             RebraidSettings settings;
+             settings.support_table_instances = 1;  // every mesh's BRefs from support tables
+             return settings;
+         }()},
     };
 }
 
@@ -199,9 +204,12 @@ TEST(RebraidBuilder, SameStructureOnOneTwoAndEightThreads) {
     std::vector<test::NamedScene> scenes = rebraid_scenes();
     for (const std::string& file : test::shared_scene_files())
         scenes.push_back({file, load_gltf_scene(std::string(REBRAID_SHARED_SCENES) + "/" + file)});
-    // A small threshold makes the parallel opening, binning and partitioning paths run.
+    // A small threshold makes the parallel opening, binning and partitioning paths run;
+    // meshes of two instances or more take their BRefs' boxes from support tables, the
+    // others from searches of their BVHs.
     RebraidSettings settings;
     settings.build.parallel_threshold = 64;
+    settings.support_table_instances = 2;
     for (const test::NamedScene& named : scenes) {
         SCOPED_TRACE(named.name);
         // The object BVHs are built on each thread count too: the whole build is checked.

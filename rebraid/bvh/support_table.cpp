@@ -1,0 +1,141 @@
+#include "rebraid/bvh/support_table.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rebraid/bvh/vertex_world_bounds.h"
+
+namespace rebraid {
+namespace {
+
+float max_abs(Vec3f v) {
+    return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+}
+
+/// The grid direction (i, j) of cube face `face`: face / 2 is the axis whose component is
+/// +1 (even face) or -1 (odd face); the next two axes in cyclic order run from -1 to 1.
+Vec3f grid_direction(int face, int i, int j, int cells) {
+    const int axis = face / 2;
+    Vec3f d{};
+    d[axis] = face % 2 == 0 ? 1.0f : -1.0f;
+    d[(axis + 1) % 3] = -1.0f + 2.0f * float(i) / float(cells);
+    d[(axis + 2) % 3] = -1.0f + 2.0f * float(j) / float(cells);
+    return d;
+}
+
+/// The extent of `box` along `d`: the range of d · p over its points.
+float extent_along(const BBox3f& box, Vec3f d) {
+    float extent = 0.0f;
+    for (int axis = 0; axis < 3; ++axis)
+        extent += std::fabs(d[axis]) * (box.max[axis] - box.min[axis]);
+    return extent;
+}
+
+}  // namespace
+
+SupportTable::SupportTable(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
+                           float tolerance) {
+    if (node.is_empty() || node_box.is_empty()) return;
+    is_empty_ = false;
+    center_ = (node_box.min + node_box.max) * 0.5f;
+    half_extent_ = (node_box.max - node_box.min) * 0.5f;
+    object_magnitude_ = std::max(max_abs(node_box.min), max_abs(node_box.max));
+    for (int face = 0; face < 6; ++face) {
+        // Each search starts from the extreme vertex of the previous, nearby direction.
+        Vec3f previous{};
+        bool has_previous = false;
+        for (int i = 0; i < kSide; ++i)
+            for (int j = 0; j < kSide; ++j) {
+                const int row_j = i % 2 == 0 ? j : kCells - j;  // snake order: always a neighbour
+                const Vec3f d = grid_direction(face, i, row_j, kCells);
+                const VertexSupport found =
+                    vertex_support(bvh, node, d, tolerance * extent_along(node_box, d),
+                                   has_previous ? &previous : nullptr);
+                previous = found.vertex;
+                has_previous = true;
+                // Relative to the centre, in double, then widened by 8 ulps of the terms: the
+                // projections in vertex_support round at the object's magnitude.
+                const double relative =
+                    double(found.value) -
+                    (double(d.x) * center_.x + double(d.y) * center_.y + double(d.z) * center_.z);
+                const double pad = 3.0 * double(object_magnitude_) * 0x1p-20;
+                values_[index(face, i, row_j)] = float(relative + pad);
+                vertices_[index(face, i, row_j)] = found.vertex;
+            }
+    }
+}
+
+SupportTable::SupportBounds SupportTable::support_bounds(Vec3f direction) const {
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+        if (std::fabs(direction[k]) > std::fabs(direction[axis])) axis = k;
+    const float scale = std::fabs(direction[axis]);
+    if (scale == 0.0f) return {0.0f, center_};  // every vertex projects to 0
+    const int face = 2 * axis + (direction[axis] < 0.0f ? 1 : 0);
+    // The direction scaled onto the cube face: both coordinates in [-1, 1] (|a| <= |b| gives
+    // |a / b| <= 1 in rounded division too).
+    const float x = (direction[(axis + 1) % 3] / scale + 1.0f) * (0.5f * kCells);
+    const float y = (direction[(axis + 2) % 3] / scale + 1.0f) * (0.5f * kCells);
+    const int i = std::min(int(x), kCells - 1);
+    const int j = std::min(int(y), kCells - 1);
+    const float a = x - float(i), b = y - float(j);
+    // Barycentric weights in the square's lower (a >= b) or upper triangle; the diagonal
+    // corners (i, j) and (i + 1, j + 1) belong to both.
+    const bool is_lower = a >= b;
+    const int corners[3] = {index(face, i, j),
+                            is_lower ? index(face, i + 1, j) : index(face, i, j + 1),
+                            index(face, i + 1, j + 1)};
+    const float weights[3] = {is_lower ? 1.0f - a : 1.0f - b, is_lower ? a - b : b - a,
+                              is_lower ? b : a};
+    float upper = 0.0f, best_projection = -std::numeric_limits<float>::infinity();
+    Vec3f best_vertex = center_;
+    for (int k = 0; k < 3; ++k) {
+        upper += weights[k] * values_[corners[k]];
+        const float projection = dot(direction, vertices_[corners[k]]);
+        if (projection > best_projection) {
+            best_projection = projection;
+            best_vertex = vertices_[corners[k]];
+        }
+    }
+    return {scale * upper, best_vertex};
+}
+
+BBox3f SupportTable::world_bounds(const AffineTransform& to_world, const ObjectBvh& bvh,
+                                  NodeRef node, float tolerance) const {
+    if (is_empty_) return BBox3f{};
+    // The largest projection onto `d` of a vertex, relative to the centre: from the table
+    // when its bounds agree to within the tolerance, else by a search started at the best
+    // corner vertex.
+    auto support = [&](Vec3f d) {
+        const SupportBounds bounds = support_bounds(d);
+        const float slack = tolerance * 2.0f *
+                            (std::fabs(d.x) * half_extent_.x + std::fabs(d.y) * half_extent_.y +
+                             std::fabs(d.z) * half_extent_.z);
+        const float centre = dot(d, center_);
+        if (bounds.upper - (dot(d, bounds.vertex) - centre) <= slack) return bounds.upper;
+        const VertexSupport found = vertex_support(bvh, node, d, slack, &bounds.vertex);
+        return std::min(bounds.upper, found.value - centre);
+    };
+    BBox3f box;
+    for (int axis = 0; axis < 3; ++axis) {
+        const Vec3f row{to_world.col_x[axis], to_world.col_y[axis], to_world.col_z[axis]};
+        const float center = dot(row, center_) + to_world.translation[axis];
+        box.min[axis] = center - support(-row);
+        box.max[axis] = center + support(row);
+    }
+    // Rounding: the weights, the sums, the projections and the mapped centre round at the
+    // magnitude of their terms, which can exceed that of the result. Pad by 32 ulps of the
+    // largest term.
+    const float matrix_magnitude =
+        std::max({max_abs(to_world.col_x), max_abs(to_world.col_y), max_abs(to_world.col_z)});
+    const float magnitude =
+        std::max({3.0f * matrix_magnitude * object_magnitude_, max_abs(to_world.translation),
+                  max_abs(box.min), max_abs(box.max)});
+    const float pad = magnitude * 0x1p-18f;
+    box.min = box.min - Vec3f{pad, pad, pad};
+    box.max = box.max + Vec3f{pad, pad, pad};
+    return box;
+}
+
+}  // namespace rebraid
