@@ -39,7 +39,7 @@ struct AnimateOptions {
     int frame_count = 30;
     float time_step = 1.0f / 30.0f;
     std::vector<std::string> update_names;  ///< empty: every strategy
-    std::vector<std::string> top_names;     ///< empty: twolevel and rebraid
+    std::vector<std::string> top_names;     ///< empty: all three
     float budget_factor = RebraidSettings{}.budget_factor;
     std::uint32_t max_cut_pieces = IncrementalTopSettings{}.max_cut_pieces;
     bool has_embree = true;
@@ -142,7 +142,8 @@ std::string strategy_names() {
 }
 
 std::vector<DynamicTop> chosen_tops(const AnimateOptions& options) {
-    if (options.top_names.empty()) return {DynamicTop::two_level, DynamicTop::rebraid};
+    if (options.top_names.empty())
+        return {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental};
     std::vector<DynamicTop> tops;
     for (const std::string& name : options.top_names) tops.push_back(parse_dynamic_top(name));
     return tops;
@@ -273,7 +274,7 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         "animate",
         "Dynamic-in-static frame benchmark: copies of an animated glTF in a static scene; per "
         "frame, pose them, update every method's structure (Embree flat, flat with refit, "
-        "instanced; twolevel and rebraid tops, and rebraid-incremental on request, with each "
+        "instanced; twolevel, rebraid and rebraid-incremental tops, with each "
         "object-BVH update strategy) and "
         "render primary rays plus one diffuse bounce through it, all on the same rays.");
     command
@@ -306,7 +307,7 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         ->add_option("--top", options->top_names,
                      "top levels, comma-separated: twolevel, rebraid, rebraid-incremental (the "
                      "static instances' re-braided top built once, only the part around the "
-                     "dynamic ones rebuilt per frame) (default: twolevel and rebraid)")
+                     "dynamic ones rebuilt per frame) (default: all three)")
         ->delimiter(',')
         ->type_name("TOP");
     command

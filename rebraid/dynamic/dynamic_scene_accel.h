@@ -33,7 +33,10 @@ DynamicTop parse_dynamic_top(std::string_view name);
 
 /// Parameters of DynamicSceneAccel.
 struct DynamicSceneAccelSettings {
-    DynamicTop top = DynamicTop::rebraid;
+    /// The incremental top by default: on scenes where most instances stand still it costs
+    /// about what the plain top costs per frame and traces like the full re-braid
+    /// (bench/RESULTS.md, frames); with no static instance it re-braids every frame in full.
+    DynamicTop top = DynamicTop::rebraid_incremental;
     /// How the BVHs of deforming meshes follow them (one updater per dynamic mesh).
     ObjectBvhUpdateSettings update;
     /// Builder of the static meshes' BVHs (built once).

@@ -88,8 +88,9 @@ TEST(AnimateCommand, JsonHasOneObjectPerMethodWithTheSummaryKeys) {
         }
     }
     const std::set<std::string> expected = {
-        "embree-flat",     "embree-flat-refit", "embree-instanced", "twolevel+refit",
-        "twolevel+rotate", "rebraid+refit",     "rebraid+rotate"};
+        "embree-flat",    "embree-flat-refit",         "embree-instanced",
+        "twolevel+refit", "twolevel+rotate",           "rebraid+refit",
+        "rebraid+rotate", "rebraid-incremental+refit", "rebraid-incremental+rotate"};
     EXPECT_EQ(methods, expected);
 }
 

@@ -100,7 +100,8 @@ void expect_matches_embree_flat(const Scene& scene, std::initializer_list<const 
 
 TEST(DynamicFrames, EveryStrategyAndTopMatchEmbreeFlatOnTheDeformedFrame) {
     const auto object = small_twisting_object();
-    for (DynamicTop top : {DynamicTop::two_level, DynamicTop::rebraid})
+    for (DynamicTop top :
+         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
         for (UpdateStrategy strategy : kUpdateStrategies) {
             SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
                          std::string(update_strategy_name(strategy)));
@@ -186,7 +187,8 @@ std::uint64_t structure_hash_after_frames(UpdateStrategy strategy, DynamicTop to
 }
 
 TEST(DynamicFrames, SameStructureOnOneAndTwoThreadsAfterFramesOfEveryStrategy) {
-    for (DynamicTop top : {DynamicTop::two_level, DynamicTop::rebraid})
+    for (DynamicTop top :
+         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
         for (UpdateStrategy strategy : kUpdateStrategies) {
             SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
                          std::string(update_strategy_name(strategy)));
