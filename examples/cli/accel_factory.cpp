@@ -47,7 +47,7 @@ constexpr std::array kAccelTable{
     AccelEntry{"twolevel", "object BVHs plus a binned-SAH top level over the instances",
                &build_two_level, true},
     AccelEntry{"rebraid", "object BVHs plus a re-braided top level (Benthin et al. 2017)",
-               &build_rebraid, true},
+               &build_rebraid, true, true},
 };
 
 constexpr std::array kObjectBuilderKinds{ObjectBuilderKind::own, ObjectBuilderKind::embree_high,
@@ -189,12 +189,31 @@ const std::vector<VariantKey>& variant_keys() {
     return keys;
 }
 
-/// One KEY=VALUE of a variant suffix applied to `options`.
-void apply_variant_setting(std::string_view spec, std::string_view key, std::string_view value,
-                           AccelOptions& options) {
-    for (const VariantKey& variant_key : variant_keys())
-        if (variant_key.key == key)
-            return variant_key.apply(VariantValue(spec, key, value), options);
+constexpr std::string_view kObjectBuilderKey = "object-builder";
+
+/// The names of the structures for which `uses` holds, for messages ("twolevel or rebraid").
+std::string names_of_structures_using(bool AccelEntry::*uses) {
+    std::string names;
+    for (const AccelEntry& entry : accel_entries())
+        if (entry.*uses) names += (names.empty() ? "" : " or ") + std::string(entry.name);
+    return names;
+}
+
+/// One KEY=VALUE of a variant suffix applied to `options`; a key the structure does not use
+/// is an error rather than a variant identical to the plain structure.
+void apply_variant_setting(std::string_view spec, const AccelEntry& entry, std::string_view key,
+                           std::string_view value, AccelOptions& options) {
+    for (const VariantKey& variant_key : variant_keys()) {
+        if (variant_key.key != key) continue;
+        const bool is_object_builder = key == kObjectBuilderKey;
+        if (is_object_builder ? !entry.has_object_bvhs : !entry.has_rebraid_settings)
+            throw Error("accel '" + std::string(spec) + "': " + std::string(entry.name) +
+                        " does not use " + std::string(key) + "; it is a setting of " +
+                        names_of_structures_using(is_object_builder
+                                                      ? &AccelEntry::has_object_bvhs
+                                                      : &AccelEntry::has_rebraid_settings));
+        return variant_key.apply(VariantValue(spec, key, value), options);
+    }
     throw Error("accel '" + std::string(spec) + "': unknown setting '" + std::string(key) +
                 "'; valid keys: " + accel_variant_keys());
 }
@@ -295,8 +314,8 @@ AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base
         if (equals == std::string_view::npos)
             throw Error("accel '" + std::string(spec) + "': setting '" + std::string(setting) +
                         "' is not KEY=VALUE");
-        apply_variant_setting(spec, setting.substr(0, equals), setting.substr(equals + 1),
-                              variant.options);
+        apply_variant_setting(spec, *variant.entry, setting.substr(0, equals),
+                              setting.substr(equals + 1), variant.options);
         start = end;
     }
     variant.options.rebraid.validate();
@@ -312,6 +331,25 @@ std::string accel_variant_keys() {
 
 const AccelEntry& find_accel(std::string_view spec) {
     return *parse_accel_variant(spec).entry;
+}
+
+void check_build_options_used(std::span<const std::string> specs, const AccelOptions& options) {
+    std::string chosen;
+    bool uses_object_bvhs = false, uses_rebraid_settings = false;
+    for (const std::string& spec : specs) {
+        const AccelEntry& entry = find_entry(base_name(spec));
+        uses_object_bvhs = uses_object_bvhs || entry.has_object_bvhs;
+        uses_rebraid_settings = uses_rebraid_settings || entry.has_rebraid_settings;
+        chosen += (chosen.empty() ? "" : ",") + spec;
+    }
+    const auto unused = [&](const std::string& option, bool AccelEntry::*uses) {
+        return Error(option + " applies only to " + names_of_structures_using(uses) +
+                     ", which --accel " + chosen + " does not build");
+    };
+    if (options.is_object_builder_given && !uses_object_bvhs)
+        throw unused("--object-builder", &AccelEntry::has_object_bvhs);
+    if (!options.rebraid_options_given.empty() && !uses_rebraid_settings)
+        throw unused(options.rebraid_options_given.front(), &AccelEntry::has_rebraid_settings);
 }
 
 std::unique_ptr<Accel> build_accel(std::string_view spec, const Scene& scene,

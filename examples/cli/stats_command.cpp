@@ -6,6 +6,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -53,6 +54,7 @@ void run_stats(const StatsOptions& options) {
     // The variant's own options (a NAME:KEY=VALUE suffix overrides the command line's), so the
     // JSON names the object builder that actually built the structure.
     options.accel_options.rebraid.validate();
+    check_build_options_used(std::span(&options.accel_name, 1), options.accel_options);
     const AccelVariant variant = parse_accel_variant(options.accel_name, options.accel_options);
     const Scene scene = load_scene(options.scene_path);
     const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);

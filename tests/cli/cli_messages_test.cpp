@@ -1,0 +1,283 @@
+// What a new user meets first: every input and output checked before the long work starts,
+// options that would change nothing refused, and each error one line in the user's words.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+#include "support/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace test = rebraid::test;
+using test::CommandResult;
+
+fs::path scratch_dir() {
+    return test::test_scratch_dir("cli_messages_test");
+}
+
+CommandResult run_rebraid(std::initializer_list<std::string> arguments, int timeout_seconds = 60) {
+    return test::run_rebraid_in(scratch_dir(), arguments, timeout_seconds);
+}
+
+std::string shared_scene(const char* file) {
+    return std::string(REBRAID_SHARED_SCENES) + "/" + file;
+}
+
+/// Expects exit code 1 and a message on stderr that starts with "rebraid: " and holds `phrase`.
+void expect_error(const CommandResult& result, const std::string& phrase) {
+    EXPECT_EQ(result.exit_code, 1) << result.err;
+    EXPECT_EQ(result.err.rfind("rebraid: ", 0), 0u) << result.err;
+    EXPECT_NE(result.err.find(phrase), std::string::npos) << "no '" << phrase << "' in\n"
+                                                          << result.err;
+}
+
+/// A small static glTF scene (two generated city blocks) in this test's folder.
+std::string static_scene_file() {
+    const fs::path path = scratch_dir() / "static.glb";
+    const CommandResult result = test::run_rebraid_in(
+        scratch_dir(), {"generate", "city", "--instances", "2", "-o", path.string()});
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return path.string();
+}
+
+/// A regular file standing where a command would need a directory.
+std::string file_in_the_way() {
+    const fs::path path = scratch_dir() / "not_a_directory";
+    test::write_text_file(path, "x");
+    return path.string();
+}
+
+// ---- Counts and numbers ----------------------------------------------------------------------
+
+TEST(CliMessages, NegativeCountSaysWhatACountMustBe) {
+    const CommandResult result = run_rebraid({"rays", "-n", "-5"});
+    expect_error(result, "--count: -5 is out of range: it must be from 1 to");
+    EXPECT_EQ(result.err.find("max_size"), std::string::npos) << result.err;
+}
+
+TEST(CliMessages, NegativeBudgetFactorGivesTheRangeInShortNumbers) {
+    const CommandResult result = run_rebraid({"stats", "--budget-factor", "-1"});
+    expect_error(result, "--budget-factor: -1 is out of range: it must be from 0 to 1e+06");
+    EXPECT_LT(result.err.size(), 200u) << result.err;  // no 309-digit bound
+}
+
+TEST(CliMessages, TextWhereANumberBelongsIsNotANumber) {
+    expect_error(run_rebraid({"render", "--width", "abc"}), "--width: 'abc' is not a whole number");
+    expect_error(run_rebraid({"render", "--fov", "wide"}), "--fov: 'wide' is not a number");
+    expect_error(run_rebraid({"bench", "--rays", "1.5"}), "--rays: '1.5' is not a whole number");
+}
+
+// ---- Names -----------------------------------------------------------------------------------
+
+TEST(CliMessages, EnumOptionsListTheirNamesInHelpAndErrors) {
+    const CommandResult help = run_rebraid({"stats", "--help"});
+    ASSERT_EQ(help.exit_code, 0);
+    EXPECT_EQ(help.out.find("->"), std::string::npos) << help.out;  // CLI11's "{extent->0,...}"
+    EXPECT_EQ(help.out.find(" OR {"), std::string::npos) << help.out;
+    expect_error(run_rebraid({"stats", "--opening", "widest"}),
+                 "--opening: 'widest' is not one of: extent, overlap, sah");
+    expect_error(run_rebraid({"render", "--mode", "foo"}),
+                 "--mode: 'foo' is not one of: ao, path, normals, heatmap");
+    expect_error(run_rebraid({"generate", "city", "-o", "x.glb", "--placement", "random"}),
+                 "--placement: 'random' is not one of: instanced, kind, world-space");
+}
+
+TEST(CliMessages, NoInternalFunctionNames) {
+    const fs::path broken = scratch_dir() / "broken.glb";
+    test::write_text_file(broken, "glTF but not really");
+    const CommandResult scene = run_rebraid({"stats", broken.string()});
+    expect_error(scene, "rebraid: scene file '" + broken.string() + "': ");
+    EXPECT_EQ(scene.err.find("load_gltf"), std::string::npos) << scene.err;
+
+    const CommandResult update = run_rebraid({"animate", "--update", "sideways"});
+    expect_error(update, "--update: unknown update strategy 'sideways'");
+    EXPECT_EQ(update.err.find("parse_"), std::string::npos) << update.err;
+
+    const CommandResult kind = run_rebraid({"generate", "forest", "-o", "x.glb"});
+    expect_error(kind, "unknown scene kind 'forest'; valid kinds: trees, crown");
+    EXPECT_EQ(kind.err.find("parse_"), std::string::npos) << kind.err;
+}
+
+TEST(CliMessages, VersionIsPrinted) {
+    const CommandResult result = run_rebraid({"--version"});
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(result.out.rfind("rebraid ", 0), 0u) << result.out;
+    EXPECT_NE(result.out.find('.'), std::string::npos) << result.out;  // a version number
+}
+
+// ---- Files -----------------------------------------------------------------------------------
+
+TEST(CliMessages, TraceOfASceneWithoutRayFileAsksForOne) {
+    const std::string scene = shared_scene("fzk_haus.glb");
+    const CommandResult result = run_rebraid({"trace", scene});
+    expect_error(result, "trace needs a ray file: 'rebraid trace [SCENE] RAYS', and '" + scene +
+                             "' is a scene");
+    EXPECT_EQ(result.err.find("expected 8 fields"), std::string::npos) << result.err;
+}
+
+TEST(CliMessages, DirectoryAsRayFileIsNamed) {
+    const fs::path dir = scratch_dir() / "rays_dir";
+    fs::create_directories(dir);
+    expect_error(run_rebraid({"trace", dir.string()}),
+                 "ray file '" + dir.string() + "' is a directory, not a file");
+}
+
+TEST(CliMessages, OutputUnderAFileGivesTheReason) {
+    const std::string blocker = file_in_the_way();
+    expect_error(run_rebraid({"rays", "-n", "10", "-o", blocker + "/rays.txt"}),
+                 "cannot create directory '" + blocker + "': Not a directory");
+    expect_error(run_rebraid({"generate", "city", "-o", blocker + "/city.glb"}),
+                 "cannot create directory '" + blocker + "': Not a directory");
+}
+
+TEST(CliMessages, DirectoryAsOutputFileIsNamed) {
+    const fs::path dir = scratch_dir() / "out_dir";
+    fs::create_directories(dir);
+    expect_error(run_rebraid({"rays", "-n", "10", "-o", dir.string()}),
+                 "ray file '" + dir.string() + "' is a directory; give a file name");
+}
+
+TEST(CliMessages, UnreadableAndUnwritableFilesGiveThePermissionReason) {
+    const fs::path dir = scratch_dir() / "locked";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path rays = dir / "rays.txt";
+    test::write_text_file(rays, "0 0 5 0 0 -1 0 inf\n");
+    fs::permissions(rays, fs::perms::none);
+    const fs::path read_only_dir = dir / "read_only";
+    fs::create_directories(read_only_dir);
+    fs::permissions(read_only_dir, fs::perms::owner_read | fs::perms::owner_exec |
+                                       fs::perms::others_read | fs::perms::others_exec);
+    // Root may read and write anything, so as root the command runs as user nobody.
+    const std::string as_user =
+        ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
+    const CommandResult read = test::run_shell_in(
+        scratch_dir(),
+        as_user + test::rebraid_command_line(std::vector<std::string>{"trace", rays.string()}));
+    expect_error(read, "ray file '" + rays.string() + "': Permission denied");
+    const CommandResult write = test::run_shell_in(
+        scratch_dir(),
+        as_user + test::rebraid_command_line(std::vector<std::string>{
+                      "rays", "-n", "10", "-o", (read_only_dir / "r.txt").string()}));
+    expect_error(write, "r.txt': Permission denied");
+    fs::permissions(read_only_dir, fs::perms::owner_all);
+}
+
+// ---- Checked before the long work ------------------------------------------------------------
+// Each command below would run for minutes if the check came after the work; a timeout turns
+// that into exit code 124 instead of the 1 expected.
+
+TEST(CliMessages, BenchChecksEveryScenePathBeforeBenchmarking) {
+    const CommandResult result =
+        run_rebraid({"bench", "default", "nosuch.glb", "--json", "--rays", "1000000000"}, 60);
+    expect_error(result, "scene file 'nosuch.glb' does not exist");
+    EXPECT_TRUE(result.out.empty()) << result.out;
+}
+
+TEST(CliMessages, RenderChecksTheOutputPathBeforeRendering) {
+    const std::string blocker = file_in_the_way();
+    expect_error(run_rebraid({"render", "-o", blocker + "/image.png", "--width", "32768",
+                              "--height", "32768", "--spp", "65536"},
+                             60),
+                 "cannot create directory '" + blocker + "': Not a directory");
+}
+
+TEST(CliMessages, AnimateChecksPlotAndCsvBeforeTheFrames) {
+    const std::string blocker = file_in_the_way();
+    expect_error(run_rebraid({"animate", "--frames", "1000000", "--csv", blocker + "/f.csv"}, 60),
+                 "cannot create directory '" + blocker + "'");
+    // The plot tools are looked up first: a missing plot script stands in for missing matplotlib.
+    ::setenv("REBRAID_PLOT_SCRIPT", (scratch_dir() / "no_such_plot.py").c_str(), 1);
+    const CommandResult plot = run_rebraid(
+        {"animate", "--frames", "1000000", "--plot", (scratch_dir() / "p.png").string()}, 60);
+    ::unsetenv("REBRAID_PLOT_SCRIPT");
+    expect_error(plot, "--plot needs the plot script");
+}
+
+// ---- Options that would change nothing ----------------------------------------------------
+
+TEST(CliMessages, CompareRefusesAShadingMode) {
+    expect_error(run_rebraid({"render", "--compare", "twolevel,rebraid", "--mode", "path"}),
+                 "--compare draws heatmaps side by side, so --mode path does not apply");
+}
+
+TEST(CliMessages, AnimationOptionsOnAStaticSceneAreRefused) {
+    expect_error(run_rebraid({"render", "--frames", "2"}),
+                 "--frames plays a glTF animation; the default scene has no animation");
+    const std::string scene = static_scene_file();
+    expect_error(run_rebraid({"render", scene, "--time", "1"}),
+                 "--time plays a glTF animation; nothing in '" + scene + "' is animated");
+    expect_error(run_rebraid({"render", "--time-step", "0.1"}),
+                 "--time-step is the time between frames; it needs --frames");
+    const fs::path rays = scratch_dir() / "rays.txt";
+    test::write_text_file(rays, "0 0 5 0 0 -1 0 inf\n");
+    expect_error(run_rebraid({"trace", scene, rays.string(), "--time", "1"}),
+                 "--time poses an animated glTF scene; nothing in '" + scene + "' is animated");
+}
+
+TEST(CliMessages, BuildOptionsOfOtherStructuresAreRefused) {
+    expect_error(run_rebraid({"stats", "--accel", "twolevel:opening=sah"}),
+                 "accel 'twolevel:opening=sah': twolevel does not use opening; it is a setting "
+                 "of rebraid");
+    expect_error(run_rebraid({"stats", "--accel", "flat:object-builder=embree-high"}),
+                 "flat does not use object-builder; it is a setting of twolevel or rebraid");
+    expect_error(run_rebraid({"stats", "--accel", "twolevel", "--opening", "sah"}),
+                 "--opening applies only to rebraid, which --accel twolevel does not build");
+    expect_error(run_rebraid({"bench", "--accel", "flat,embree-flat", "--object-builder", "own"}),
+                 "--object-builder applies only to twolevel or rebraid, which --accel "
+                 "flat,embree-flat does not build");
+    // Among several structures, an option is fine when one of them uses it.
+    const CommandResult mixed = run_rebraid({"bench", "--accel", "twolevel,rebraid", "--opening",
+                                             "extent", "--rays", "200", "--repetitions", "1"});
+    EXPECT_EQ(mixed.exit_code, 0) << mixed.err;
+}
+
+// ---- Output on a terminal and in a pipe -------------------------------------------------------
+
+/// Runs `arguments` under `script`, so standard error is a terminal; returns what it showed.
+std::string run_on_terminal(const std::vector<std::string>& arguments) {
+    const std::string inner = test::rebraid_command_line(arguments);
+    const CommandResult result = test::run_shell_in(
+        scratch_dir(), "script -qefc " + test::shell_quote(inner) + " /dev/null");
+    EXPECT_EQ(result.exit_code, 0) << result.out << result.err;
+    return result.out;
+}
+
+TEST(CliMessages, RaysAndTraceSummarizeOnATerminalOnly) {
+    const fs::path rays = scratch_dir() / "rays.txt";
+    const CommandResult piped = run_rebraid({"rays", "-n", "10", "-o", rays.string()});
+    EXPECT_EQ(piped.exit_code, 0) << piped.err;
+    EXPECT_TRUE(piped.err.empty()) << piped.err;
+    EXPECT_NE(run_on_terminal({"rays", "-n", "10", "-o", rays.string()})
+                  .find("wrote 10 rays around the default scene to " + rays.string()),
+              std::string::npos);
+
+    const fs::path hits = scratch_dir() / "hits.txt";
+    const CommandResult traced = run_rebraid({"trace", rays.string(), "-o", hits.string()});
+    EXPECT_EQ(traced.exit_code, 0) << traced.err;
+    EXPECT_TRUE(traced.err.empty()) << traced.err;
+    EXPECT_NE(run_on_terminal({"trace", rays.string(), "-o", hits.string()})
+                  .find("traced 10 rays through rebraid in default scene: "),
+              std::string::npos);
+}
+
+TEST(CliMessages, BenchShowsProgressOnATerminalOnly) {
+    const std::vector<std::string> bench{"bench", "--accel",       "flat", "--rays",
+                                         "200",   "--repetitions", "1"};
+    const CommandResult piped = test::run_rebraid_in(scratch_dir(), bench);
+    EXPECT_EQ(piped.exit_code, 0) << piped.err;
+    EXPECT_TRUE(piped.err.empty()) << piped.err;
+    const std::string shown = run_on_terminal(bench);
+    EXPECT_NE(shown.find("bench: scene 1/1 (default scene), flat (1/1): building"),
+              std::string::npos)
+        << shown;
+}
+
+}  // namespace
