@@ -261,8 +261,19 @@ void run_render(RenderOptions options) {
     if (render_scene.animator) render_scene.animator->apply(start_time, scene);
     const float aspect = static_cast<float>(options.render.width) / options.render.height;
     // Chosen on the first frame's pose and kept, so an animation does not jump around.
-    const viewer::CameraChoice camera =
+    viewer::CameraChoice camera =
         viewer::choose_camera(scene, render_scene.cameras, camera_request, aspect);
+    // A file's own camera may frame the model differently from what the user expects (it may
+    // crop it): say how to pick another.
+    const bool is_file_camera_by_default = !render_scene.cameras.empty() && options.camera_id < 0 &&
+                                           options.look_from.empty() && options.look_at.empty() &&
+                                           options.fov_degrees == 0.0f;
+    if (is_file_camera_by_default)
+        camera.description +=
+            render_scene.cameras.size() == 1
+                ? std::string(" (the file's own; --fov or --look-from X,Y,Z for another view)")
+                : " (the first of the file's " + std::to_string(render_scene.cameras.size()) +
+                      "; --camera N, --fov or --look-from X,Y,Z for another view)";
 
     const int frame_count = std::max(1, options.frame_count);
     const std::uint64_t rows_per_frame =

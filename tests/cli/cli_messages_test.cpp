@@ -239,6 +239,24 @@ TEST(CliMessages, BuildOptionsOfOtherStructuresAreRefused) {
     EXPECT_EQ(mixed.exit_code, 0) << mixed.err;
 }
 
+// ---- Which camera ------------------------------------------------------------------------------
+
+TEST(CliMessages, RenderNamesTheFileCameraAndHowToChooseAnother) {
+    const std::string engine = shared_scene("two_cylinder_engine.glb");
+    const fs::path image = scratch_dir() / "engine.png";
+    const CommandResult own = run_rebraid(
+        {"render", engine, "--width", "16", "--height", "9", "--spp", "1", "-o", image.string()});
+    EXPECT_EQ(own.exit_code, 0) << own.err;
+    EXPECT_NE(own.out.find("glTF camera 0 (the file's own; --fov or --look-from X,Y,Z for another "
+                           "view)"),
+              std::string::npos)
+        << own.out;
+    const CommandResult wider = run_rebraid({"render", engine, "--width", "16", "--height", "9",
+                                             "--spp", "1", "--fov", "24", "-o", image.string()});
+    EXPECT_EQ(wider.exit_code, 0) << wider.err;
+    EXPECT_NE(wider.out.find("glTF camera 0, --fov 24,"), std::string::npos) << wider.out;
+}
+
 // ---- Output on a terminal and in a pipe -------------------------------------------------------
 
 /// Runs `arguments` under `script`, so standard error is a terminal; returns what it showed.
