@@ -264,6 +264,12 @@ void run_animate(const AnimateOptions& options) {
 
     if (!options.csv_path.empty())
         write_output(options.csv_path, [&](std::ostream& out) { write_animate_csv(out, results); });
+    // The summary first: whatever happens to the plot, the measurements are not lost.
+    if (options.is_json)
+        std::cout << animate_summary_json(results).dump(2) << "\n";
+    else
+        print_animate_table(std::cout, results);
+    std::cout.flush();
     if (!options.plot_path.empty()) {
         std::string csv = options.csv_path;
         std::filesystem::path temporary;
@@ -282,10 +288,6 @@ void run_animate(const AnimateOptions& options) {
         }
         if (!temporary.empty()) std::filesystem::remove(temporary);
     }
-    if (options.is_json)
-        std::cout << animate_summary_json(results).dump(2) << "\n";
-    else
-        print_animate_table(std::cout, results);
 }
 
 }  // namespace

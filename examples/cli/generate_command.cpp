@@ -18,6 +18,7 @@
 #include "rebraid/core/error.h"
 #include "rebraid/generators/scene_generators.h"
 #include "rebraid/io/gltf_writer.h"
+#include "status_line.h"
 
 namespace rebraid::cli {
 
@@ -44,6 +45,8 @@ void run_generate(const GenerateOptions& options) {
         throw Error("output file '" + options.output_path +
                     "' must end in .glb (one binary file) or .gltf (JSON plus a .bin file)");
     check_output_file(options.output_path, "scene file");
+    StatusLine status;
+    status.show("generate: making " + options.kind_name);
     const auto generate_start = std::chrono::steady_clock::now();
     const Scene scene = generate_scene(kind, {.placement = options.placement,
                                               .instance_count = options.instance_count,
@@ -51,9 +54,11 @@ void run_generate(const GenerateOptions& options) {
     const double generate_ms = milliseconds_since(generate_start);
 
     create_parent_directories(options.output_path);
+    status.show("generate: writing " + options.output_path);
     const auto write_start = std::chrono::steady_clock::now();
     write_gltf_scene(scene, options.output_path);
     const double write_ms = milliseconds_since(write_start);
+    status.clear();
 
     std::error_code error;
     const std::uintmax_t file_bytes = std::filesystem::file_size(options.output_path, error);

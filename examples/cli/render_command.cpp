@@ -11,6 +11,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -55,8 +56,7 @@ struct RenderOptions {
     float time_step = 1.0f / 24.0f;
     int animation_id = 0;
     std::optional<float> start_time;  ///< --time: pose the animation at this time first
-    bool is_mode_given = false;       ///< --mode was on the command line
-    bool is_time_step_given = false;  ///< --time-step was on the command line
+    std::set<std::string> given;      ///< the options on the command line ("--mode", ...)
 };
 
 /// The scene, and what its glTF file says beyond the geometry (empty for the default scene).
@@ -225,17 +225,35 @@ FrameResult render_frame(const RenderOptions& options, const Scene& scene,
     return frame;
 }
 
+/// Refuses options the chosen mode would ignore, since the image would not show them.
+void check_options_apply(const RenderOptions& options) {
+    const auto given = [&](const char* name) { return options.given.contains(name); };
+    const bool is_compare = !options.compare_names.empty();
+    if (is_compare && given("--mode") && options.mode_name != kHeatmapModeName)
+        throw Error("--compare draws heatmaps side by side, so --mode " + options.mode_name +
+                    " does not apply; leave out --mode, or --compare to render one structure");
+    if (is_compare && given("--accel"))
+        throw Error(
+            "--compare names the structures to draw, so --accel does not apply; list "
+            "every structure in --compare");
+    if (!is_heatmap(options) && given("--heat"))
+        throw Error("--heat chooses what a heatmap shows; it needs --mode heatmap or --compare");
+    if (given("--bounces") && (is_heatmap(options) || options.mode_name != "path"))
+        throw Error("--bounces applies to --mode path only");
+    if (given("--spp") && (is_heatmap(options) || options.mode_name == "normals"))
+        throw Error("--spp applies to --mode ao and --mode path only");
+    if (options.frame_count == 0 && given("--time-step"))
+        throw Error("--time-step is the time between frames; it needs --frames");
+    if (options.frame_count == 0 && !options.start_time && given("--animation"))
+        throw Error("--animation chooses what --frames or --time plays; it needs one of them");
+}
+
 void run_render(RenderOptions options) {
     // Everything that can be checked before the slow part is checked first.
     const std::vector<std::string> names = structure_names(options);
     for (const std::string& name : names) find_accel(name);
     check_build_options_used(names, options.accel_options);
-    if (!options.compare_names.empty() && options.is_mode_given &&
-        options.mode_name != kHeatmapModeName)
-        throw Error("--compare draws heatmaps side by side, so --mode " + options.mode_name +
-                    " does not apply; leave out --mode, or --compare to render one structure");
-    if (options.frame_count == 0 && options.is_time_step_given)
-        throw Error("--time-step is the time between frames; it needs --frames");
+    check_options_apply(options);
     if (!is_heatmap(options)) options.render.mode = parse_mode(options.mode_name);
     parse_heat_metric(options.heat_metric_name);
     options.render.validate();
@@ -415,8 +433,8 @@ void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& act
     add_accel_build_options(*command, options->accel_options);
     add_common_options(*command, common);
     command->callback([options, command, &action] {
-        options->is_mode_given = command->count("--mode") > 0;
-        options->is_time_step_given = command->count("--time-step") > 0;
+        for (const CLI::Option* option : command->get_options())
+            if (option->count() > 0) options->given.insert(option->get_name());
         action = [options] { run_render(*options); };
     });
 }

@@ -208,6 +208,19 @@ TEST(CliMessages, CompareRefusesAShadingMode) {
                  "--compare draws heatmaps side by side, so --mode path does not apply");
 }
 
+TEST(CliMessages, RenderOptionsTheModeIgnoresAreRefused) {
+    expect_error(run_rebraid({"render", "--compare", "twolevel,rebraid", "--accel", "flat"}),
+                 "--compare names the structures to draw, so --accel does not apply");
+    expect_error(run_rebraid({"render", "--heat", "nodes"}),
+                 "--heat chooses what a heatmap shows; it needs --mode heatmap or --compare");
+    expect_error(run_rebraid({"render", "--bounces", "3"}),
+                 "--bounces applies to --mode path only");
+    expect_error(run_rebraid({"render", "--mode", "normals", "--spp", "4"}),
+                 "--spp applies to --mode ao and --mode path only");
+    expect_error(run_rebraid({"render", "--animation", "1"}),
+                 "--animation chooses what --frames or --time plays; it needs one of them");
+}
+
 TEST(CliMessages, AnimationOptionsOnAStaticSceneAreRefused) {
     expect_error(run_rebraid({"render", "--frames", "2"}),
                  "--frames plays a glTF animation; the default scene has no animation");
@@ -237,6 +250,46 @@ TEST(CliMessages, BuildOptionsOfOtherStructuresAreRefused) {
     const CommandResult mixed = run_rebraid({"bench", "--accel", "twolevel,rebraid", "--opening",
                                              "extent", "--rays", "200", "--repetitions", "1"});
     EXPECT_EQ(mixed.exit_code, 0) << mixed.err;
+}
+
+// ---- Outputs that explain themselves ---------------------------------------------------------
+
+TEST(CliMessages, StatsSaysWhatTheBudgetCountsAndWhyEmbreeHasNoSah) {
+    const CommandResult rebraid = run_rebraid({"stats"});
+    ASSERT_EQ(rebraid.exit_code, 0) << rebraid.err;
+    EXPECT_NE(rebraid.out.find("extra BRefs opening may add beyond one per instance"),
+              std::string::npos)
+        << rebraid.out;
+    EXPECT_NE(rebraid.out.find("one per instance, plus those opening added"), std::string::npos)
+        << rebraid.out;
+    const CommandResult embree = run_rebraid({"stats", "--accel", "embree-flat"});
+    ASSERT_EQ(embree.exit_code, 0) << embree.err;
+    EXPECT_NE(embree.out.find("(no sah, nodes or leaves: embree-flat is Embree's own BVH"),
+              std::string::npos)
+        << embree.out;
+}
+
+TEST(CliMessages, CompareSaysEmbreeCountsNoWork) {
+    const fs::path image = scratch_dir() / "compare.png";
+    const CommandResult result =
+        run_rebraid({"render", "--compare", "embree-flat,rebraid", "--width", "32", "--height",
+                     "18", "-o", image.string()});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_NE(result.out.find("embree-flat: work not counted"), std::string::npos) << result.out;
+    EXPECT_NE(result.out.find("rebraid: "), std::string::npos) << result.out;
+    EXPECT_NE(result.out.find(" nodes visited"), std::string::npos) << result.out;
+}
+
+TEST(CliMessages, AnimateSummaryIsPrintedEvenWhenThePlotFails) {
+    const fs::path failing_script = scratch_dir() / "failing_plot.py";
+    test::write_text_file(failing_script, "import sys\nsys.exit(3)\n");
+    ::setenv("REBRAID_PLOT_SCRIPT", failing_script.c_str(), 1);
+    const CommandResult result = run_rebraid(
+        {"animate", "--frames", "1", "--width", "8", "--height", "8", "--no-embree", "--update",
+         "refit", "--json", "--plot", (scratch_dir() / "plot.png").string()});
+    ::unsetenv("REBRAID_PLOT_SCRIPT");
+    expect_error(result, "--plot: ");
+    EXPECT_NE(result.out.find("\"mean_frame_ms\""), std::string::npos) << result.out;
 }
 
 // ---- Which camera ------------------------------------------------------------------------------
@@ -293,6 +346,8 @@ TEST(CliMessages, BenchShowsProgressOnATerminalOnly) {
     EXPECT_EQ(piped.exit_code, 0) << piped.err;
     EXPECT_TRUE(piped.err.empty()) << piped.err;
     const std::string shown = run_on_terminal(bench);
+    EXPECT_NE(run_on_terminal({"stats", "--accel", "flat"}).find("stats: building flat"),
+              std::string::npos);
     EXPECT_NE(shown.find("bench: scene 1/1 (default scene), flat (1/1): building"),
               std::string::npos)
         << shown;

@@ -4,6 +4,7 @@
 // says; the other commands by the tests named in kCommandsTestedElsewhere.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -73,15 +74,16 @@ void set_option(std::vector<std::string>& arguments, const std::string& option,
     arguments.push_back(value);
 }
 
-/// The smaller sizes the README promises the tests use: a small image, few samples, rays,
-/// repetitions and frames. The commands are otherwise as written.
+/// The smaller sizes the README promises the tests use: a small image, one sample where the
+/// command sets samples, few rays, repetitions and frames. The commands are otherwise as written.
 std::vector<std::string> with_small_sizes(std::vector<std::string> arguments) {
     const std::string command = arguments.front();  // a copy: set_option may reallocate
     if (command == "render" || command == "animate") {
         set_option(arguments, "--width", "48");
         set_option(arguments, "--height", "27");
     }
-    if (command == "render") set_option(arguments, "--spp", "1");
+    if (std::ranges::find(arguments, "--spp") != arguments.end())
+        set_option(arguments, "--spp", "1");
     if (command == "bench") {
         set_option(arguments, "--rays", "500");
         set_option(arguments, "--repetitions", "1");
