@@ -101,6 +101,11 @@ AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base
 /// before loading a scene, so a typo fails fast.
 const AccelEntry& find_accel(std::string_view spec);
 
+/// Throws rebraid::Error when two of `variants` build the same structure: the same name and
+/// the same settings, such as `rebraid` and `rebraid:opening=sah` while sah is the default. A
+/// comparison would show one structure twice and suggest a difference that is not there.
+void check_variants_differ(std::span<const AccelVariant> variants);
+
 /// Throws rebraid::Error when the command line gave a build option (`--opening`,
 /// `--object-builder`, ...) that none of the structures `specs` names uses, since it would
 /// change nothing.

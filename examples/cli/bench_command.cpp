@@ -191,6 +191,7 @@ void run_bench(const BenchOptions& options) {
         variants.push_back(parse_accel_variant(name, options.accel_options));
         name_width = std::max(name_width, int(row_name(variants.back()).size()));
     }
+    check_variants_differ(variants);
 
     std::vector<std::string> scene_paths = options.scene_paths;
     if (scene_paths.empty()) scene_paths.emplace_back();

@@ -253,6 +253,10 @@ void run_render(RenderOptions options) {
     const std::vector<std::string> names = structure_names(options);
     for (const std::string& name : names) find_accel(name);
     check_build_options_used(names, options.accel_options);
+    std::vector<AccelVariant> variants;
+    for (const std::string& name : names)
+        variants.push_back(parse_accel_variant(name, options.accel_options));
+    check_variants_differ(variants);
     check_options_apply(options);
     if (!is_heatmap(options)) options.render.mode = parse_mode(options.mode_name);
     parse_heat_metric(options.heat_metric_name);

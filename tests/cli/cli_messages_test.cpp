@@ -246,6 +246,14 @@ TEST(CliMessages, BuildOptionsOfOtherStructuresAreRefused) {
     expect_error(run_rebraid({"bench", "--accel", "flat,embree-flat", "--object-builder", "own"}),
                  "--object-builder applies only to twolevel or rebraid, which --accel "
                  "flat,embree-flat does not build");
+    // A comparison of a structure with itself, under another name, is refused.
+    expect_error(run_rebraid({"bench", "--accel", "twolevel,rebraid,rebraid:opening=sah"}),
+                 "accel 'rebraid' and 'rebraid:opening=sah' build the same structure");
+    expect_error(run_rebraid({"render", "--compare", "flat,flat"}),
+                 "accel 'flat' and 'flat' build the same structure");
+    expect_error(
+        run_rebraid({"bench", "--accel", "rebraid,rebraid:opening=extent", "--opening", "extent"}),
+        "accel 'rebraid' and 'rebraid:opening=extent' build the same structure");
     // Among several structures, an option is fine when one of them uses it.
     const CommandResult mixed = run_rebraid({"bench", "--accel", "twolevel,rebraid", "--opening",
                                              "extent", "--rays", "200", "--repetitions", "1"});
