@@ -29,7 +29,7 @@ bool is_space(char c) {
 /// Builds the message prefix every bad-line error shares.
 std::string line_error(const std::string& source_name, std::size_t line_number,
                        const std::string& what) {
-    return "read_rays: " + source_name + ": line " + std::to_string(line_number) + ": " + what;
+    return "ray file '" + source_name + "': line " + std::to_string(line_number) + ": " + what;
 }
 
 /// Parses one whole field as a float. Returns false when the text is not a float or is

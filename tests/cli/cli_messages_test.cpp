@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <initializer_list>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -30,10 +31,14 @@ std::string shared_scene(const char* file) {
     return std::string(REBRAID_SHARED_SCENES) + "/" + file;
 }
 
-/// Expects exit code 1 and a message on stderr that starts with "rebraid: " and holds `phrase`.
+/// Expects exit code 1 and a message on stderr that starts with "rebraid: " and holds `phrase`,
+/// without a function or type name of the code in front of a colon ("load_gltf_scene: ",
+/// "RebraidSettings: ", "IncrementalTopLevel::build_frame: ").
 void expect_error(const CommandResult& result, const std::string& phrase) {
+    static const std::regex internal_name(R"(\b([a-z]+_[a-z_]+|[A-Z][a-z]+[A-Z]\w*)(::\w+)?: )");
     EXPECT_EQ(result.exit_code, 1) << result.err;
     EXPECT_EQ(result.err.rfind("rebraid: ", 0), 0u) << result.err;
+    EXPECT_FALSE(std::regex_search(result.err, internal_name)) << result.err;
     EXPECT_NE(result.err.find(phrase), std::string::npos) << "no '" << phrase << "' in\n"
                                                           << result.err;
 }
@@ -99,6 +104,11 @@ TEST(CliMessages, NoInternalFunctionNames) {
     const CommandResult update = run_rebraid({"animate", "--update", "sideways"});
     expect_error(update, "--update: unknown update strategy 'sideways'");
     EXPECT_EQ(update.err.find("parse_"), std::string::npos) << update.err;
+
+    const fs::path rays = scratch_dir() / "bad_rays.txt";
+    test::write_text_file(rays, "0 0 5 0 0 -1 0\n");
+    expect_error(run_rebraid({"trace", rays.string()}),
+                 "ray file '" + rays.string() + "': line 1: ");
 
     const CommandResult kind = run_rebraid({"generate", "forest", "-o", "x.glb"});
     expect_error(kind, "unknown scene kind 'forest'; valid kinds: trees, crown");
