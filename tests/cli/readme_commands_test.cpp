@@ -2,9 +2,11 @@
 // commands here, in README order in a folder laid out like the repository's (`out/`, and the
 // shared scenes at `../shared/scenes`), with smaller images, ray and frame counts as the README
 // says; the other commands by the tests named in kCommandsTestedElsewhere.
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -132,6 +134,76 @@ TEST(ReadmeCommands, EveryRebraidCommandRunsAsWritten) {
         }
     }
     EXPECT_GE(command_count, 12) << "README.md has fewer rebraid commands than expected";
+}
+
+/// The pixels of the image at `path`, 8-bit RGB, row-major; empty when it cannot be read.
+struct Rgb8Image {
+    int width = 0, height = 0;
+    std::vector<unsigned char> pixels;
+};
+
+Rgb8Image read_rgb8(const fs::path& path) {
+    Rgb8Image image;
+    auto input = OIIO::ImageInput::open(path.string());
+    if (!input) return image;
+    image.width = input->spec().width;
+    image.height = input->spec().height;
+    image.pixels.resize(std::size_t(image.width) * image.height * 3);
+    if (!input->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, image.pixels.data()))
+        image.pixels.clear();
+    return image;
+}
+
+/// "twolevel: ... (3.93 nodes, ..." -> 3.93: nodes per ray of `accel` in render's summary.
+double nodes_per_ray(const std::string& summary, const std::string& accel) {
+    const std::size_t line = summary.find("  " + accel + ": ");
+    const std::size_t open = summary.find('(', line);
+    if (line == std::string::npos || open == std::string::npos) return -1.0;
+    return std::stod(summary.substr(open + 1));
+}
+
+// The heatmap picture is exact apart from its Mrays/s labels, so it must be what the build
+// draws today; the path-traced pictures take minutes and are left to whoever renders them.
+TEST(ReadmeCommands, HeatmapPictureAndItsFiguresAreWhatTheBuildGives) {
+    std::string command;
+    for (const std::string& line : readme_shell_lines())
+        if (line.find("--compare twolevel,rebraid") != std::string::npos &&
+            line.find("-o out/heatmap_compare.png") != std::string::npos)
+            command = line;
+    ASSERT_FALSE(command.empty()) << "README.md no longer shows the heatmap command";
+    const fs::path dir = test::test_scratch_dir("readme_commands_test", true);
+    fs::create_directories(dir / "shared");
+    fs::create_directory_symlink(fs::absolute(REBRAID_SHARED_SCENES), dir / "shared" / "scenes");
+    fs::create_directories(dir / "repository");
+    const std::vector<std::string> arguments = split_words(command.substr(kRebraid.size()));
+    const CommandResult result =
+        test::run_shell_in(dir, "cd " + test::shell_quote((dir / "repository").string()) + " && " +
+                                    test::rebraid_command_line(arguments));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+
+    const Rgb8Image built = read_rgb8(dir / "repository" / "out" / "heatmap_compare.png");
+    const Rgb8Image shown =
+        read_rgb8(fs::path(REBRAID_SOURCE_DIR) / "docs" / "images" / "heatmap_compare.png");
+    ASSERT_FALSE(built.pixels.empty());
+    ASSERT_FALSE(shown.pixels.empty());
+    ASSERT_EQ(built.width, shown.width);
+    ASSERT_EQ(built.height, shown.height);
+    // Rows below the panel titles, whose Mrays/s vary from run to run.
+    constexpr int kTitleRows = 28;
+    std::size_t differing = 0;
+    for (std::size_t i = std::size_t(kTitleRows) * built.width * 3; i < built.pixels.size(); ++i)
+        differing += built.pixels[i] != shown.pixels[i];
+    EXPECT_EQ(differing, 0u) << "docs/images/heatmap_compare.png is not what " << command
+                             << " draws now; render it again and copy it over";
+
+    // The README's sentence about it: "re-braiding lowers the nodes a ray visits from A to B".
+    char expected[64];
+    std::snprintf(expected, sizeof expected, "from %.1f to %.1f",
+                  nodes_per_ray(result.out, "twolevel"), nodes_per_ray(result.out, "rebraid"));
+    EXPECT_NE(test::read_text_file(fs::path(REBRAID_SOURCE_DIR) / "README.md").find(expected),
+              std::string::npos)
+        << "README.md should say '" << expected << "'; the command printed\n"
+        << result.out;
 }
 
 TEST(ReadmeCommands, EveryOtherCommandHasATest) {
