@@ -336,7 +336,12 @@ AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base
                               setting.substr(equals + 1), variant.options);
         start = end;
     }
-    variant.options.rebraid.validate();
+    try {
+        variant.options.rebraid.validate();
+    } catch (const Error& error) {
+        // Names the --accel text too, since the value may come from it.
+        throw Error("accel '" + std::string(spec) + "': " + error.what());
+    }
     return variant;
 }
 

@@ -1,6 +1,7 @@
 #include "rebraid/rebraiding/rebraid_settings.h"
 
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "rebraid/bvh/wide_node.h"
@@ -10,9 +11,11 @@ namespace rebraid {
 
 void RebraidSettings::validate() const {
     auto check = [](bool ok, const char* field, float value, const char* rule) {
-        if (!ok)
-            throw Error(std::string("re-braiding setting ") + field + " " + std::to_string(value) +
-                        " " + rule);
+        if (!ok) {
+            std::ostringstream text;  // "-1", not "-1.000000"
+            text << "re-braiding setting " << field << " " << value << " " << rule;
+            throw Error(text.str());
+        }
     };
     check(std::isfinite(open_threshold) && open_threshold >= 0.0f, "open_threshold", open_threshold,
           "must be finite and >= 0");

@@ -256,6 +256,9 @@ TEST(CliMessages, BuildOptionsOfOtherStructuresAreRefused) {
     expect_error(run_rebraid({"bench", "--accel", "flat,embree-flat", "--object-builder", "own"}),
                  "--object-builder applies only to twolevel or rebraid, which --accel "
                  "flat,embree-flat does not build");
+    expect_error(run_rebraid({"stats", "--accel", "rebraid:open-threshold=-1"}),
+                 "accel 'rebraid:open-threshold=-1': re-braiding setting open_threshold -1 must "
+                 "be finite and >= 0");
     // A comparison of a structure with itself, under another name, is refused.
     expect_error(run_rebraid({"bench", "--accel", "twolevel,rebraid,rebraid:opening=sah"}),
                  "accel 'rebraid' and 'rebraid:opening=sah' build the same structure");
