@@ -218,6 +218,14 @@ TEST(CliMessages, CompareRefusesAShadingMode) {
                  "--compare draws heatmaps side by side, so --mode path does not apply");
 }
 
+TEST(CliMessages, RenderSaysWhatIsWrongWithImageNameAndCamera) {
+    expect_error(run_rebraid({"render", "-o", (scratch_dir() / "image.foo").string()}),
+                 "image.foo': name the image .png, or .exr for linear half-float");
+    expect_error(run_rebraid({"render", "--look-from", "1,1,1", "--look-at", "1,1,1", "-o",
+                              (scratch_dir() / "image.png").string()}),
+                 "the camera's look-from and look-at points are the same point");
+}
+
 TEST(CliMessages, RenderOptionsTheModeIgnoresAreRefused) {
     expect_error(run_rebraid({"render", "--compare", "twolevel,rebraid", "--accel", "flat"}),
                  "--compare names the structures to draw, so --accel does not apply");
