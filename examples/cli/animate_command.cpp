@@ -347,7 +347,8 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
         ->check(whole_number(1, NodeRef::kMaxFirst))
         ->capture_default_str()
         ->type_name("N");
-    command->add_flag("!--no-embree", options->has_embree, "leave out the Embree methods");
+    command->add_flag_callback(
+        "--no-embree", [options] { options->has_embree = false; }, "leave out the Embree methods");
     add_object_builder_option(*command, "--static-builder", options->static_builder,
                               "BVHs of the static meshes in twolevel and rebraid methods (built "
                               "once)");
