@@ -3,7 +3,8 @@
 #   1. cmake --install the build tree into a scratch prefix;
 #   2. configure examples/dropin against it with find_package(rebraid CONFIG REQUIRED);
 #   3. build it and run `dropin_example --check`, which traces the same rays through Embree,
-#      EmbreeAccel and the user-geometry scene, before and after an update;
+#      EmbreeAccel and the user-geometry scene, before and after an update; its --help and a
+#      bad --mode;
 #   4. configure, build and run examples/minimal (the library alone, <rebraid/rebraid.h>);
 #   5. run the installed `rebraid` command.
 # Only public headers are installed: a builder internal must be missing from the prefix.
@@ -54,6 +55,16 @@ if(NOT last_output MATCHES "check passed")
     message(FATAL_ERROR "dropin_example --check did not pass:\n${last_output}")
 endif()
 message(STATUS "${last_output}")
+# Its command line: --help is an answer, not an error; a bad mode is refused, not replaced.
+run("dropin_example --help" ${consumer}/dropin_example --help)
+if(NOT last_output MATCHES "usage: dropin_example")
+    message(FATAL_ERROR "dropin_example --help printed no usage:\n${last_output}")
+endif()
+execute_process(COMMAND ${consumer}/dropin_example --mode foo RESULT_VARIABLE result
+                OUTPUT_VARIABLE output ERROR_VARIABLE output)
+if(NOT result EQUAL 2 OR NOT output MATCHES "--mode foo: expected embree, rebraid or user-geometry")
+    message(FATAL_ERROR "dropin_example --mode foo gave ${result}:\n${output}")
+endif()
 set(minimal ${REBRAID_WORK_DIR}/minimal)
 run("configure the minimal example" ${CMAKE_COMMAND} -S ${REBRAID_SOURCE_DIR}/examples/minimal
     -B ${minimal} -G ${REBRAID_GENERATOR} -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix})

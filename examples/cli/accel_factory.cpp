@@ -47,7 +47,7 @@ constexpr std::array kAccelTable{
     AccelEntry{"twolevel", "object BVHs plus a binned-SAH top level over the instances",
                &build_two_level, true},
     AccelEntry{"rebraid", "object BVHs plus a re-braided top level (Benthin et al. 2017)",
-               &build_rebraid, true},
+               &build_rebraid, true, true},
 };
 
 constexpr std::array kObjectBuilderKinds{ObjectBuilderKind::own, ObjectBuilderKind::embree_high,
@@ -122,27 +122,42 @@ private:
     std::string_view spec_, key_, value_;
 };
 
-/// How one variant key sets AccelOptions from its value.
-using ApplySetting = std::function<void(const VariantValue&, AccelOptions&)>;
+/// What one variant key does: sets AccelOptions from its value, and tells whether two sets of
+/// options agree on the setting it sets.
+struct Setting {
+    std::function<void(const VariantValue&, AccelOptions&)> apply;
+    std::function<bool(const AccelOptions&, const AccelOptions&)> is_same;
+};
 
-ApplySetting real_number(float RebraidSettings::*field) {
-    return [field](const VariantValue& value, AccelOptions& options) {
-        options.rebraid.*field = value.number();
+template <class Field>
+std::function<bool(const AccelOptions&, const AccelOptions&)> same_field(
+    Field RebraidSettings::*field) {
+    return [field](const AccelOptions& a, const AccelOptions& b) {
+        return a.rebraid.*field == b.rebraid.*field;
     };
 }
 
-ApplySetting whole_number(std::uint32_t RebraidSettings::*field, std::uint32_t max) {
-    return [field, max](const VariantValue& value, AccelOptions& options) {
-        options.rebraid.*field = value.whole_number(max);
-    };
+Setting real_number(float RebraidSettings::*field) {
+    return {[field](const VariantValue& value, AccelOptions& options) {
+                options.rebraid.*field = value.number();
+            },
+            same_field(field)};
+}
+
+Setting whole_number(std::uint32_t RebraidSettings::*field, std::uint32_t max) {
+    return {[field, max](const VariantValue& value, AccelOptions& options) {
+                options.rebraid.*field = value.whole_number(max);
+            },
+            same_field(field)};
 }
 
 template <class Choice>
-ApplySetting named_choice(Choice RebraidSettings::*field,
-                          std::vector<std::pair<std::string_view, Choice>> names) {
-    return [field, names = std::move(names)](const VariantValue& value, AccelOptions& options) {
-        options.rebraid.*field = value.choice<Choice>(names);
-    };
+Setting named_choice(Choice RebraidSettings::*field,
+                     std::vector<std::pair<std::string_view, Choice>> names) {
+    return {[field, names = std::move(names)](const VariantValue& value, AccelOptions& options) {
+                options.rebraid.*field = value.choice<Choice>(names);
+            },
+            same_field(field)};
 }
 
 /// Each of `choices` under the name `name_of` gives it, in the order of `choices`.
@@ -156,7 +171,7 @@ std::vector<std::pair<std::string_view, Choice>> named(const std::array<Choice, 
 
 struct VariantKey {
     std::string_view key;
-    ApplySetting apply;
+    Setting setting;
 };
 
 /// Every key a variant suffix accepts (accel_variant_keys() lists them for help texts): adding
@@ -165,10 +180,13 @@ const std::vector<VariantKey>& variant_keys() {
     using Settings = RebraidSettings;
     static const std::vector<VariantKey> keys{
         {"object-builder",
-         [](const VariantValue& value, AccelOptions& options) {
-             options.object_builder = value.choice<ObjectBuilderKind>(
-                 named(kObjectBuilderKinds, object_builder_name), "not an object builder");
-         }},
+         {[](const VariantValue& value, AccelOptions& options) {
+              options.object_builder = value.choice<ObjectBuilderKind>(
+                  named(kObjectBuilderKinds, object_builder_name), "not an object builder");
+          },
+          [](const AccelOptions& a, const AccelOptions& b) {
+              return a.object_builder == b.object_builder;
+          }}},
         {"open-threshold", real_number(&Settings::open_threshold)},
         {"budget-factor", real_number(&Settings::budget_factor)},
         {"budget-rule",
@@ -189,12 +207,31 @@ const std::vector<VariantKey>& variant_keys() {
     return keys;
 }
 
-/// One KEY=VALUE of a variant suffix applied to `options`.
-void apply_variant_setting(std::string_view spec, std::string_view key, std::string_view value,
-                           AccelOptions& options) {
-    for (const VariantKey& variant_key : variant_keys())
-        if (variant_key.key == key)
-            return variant_key.apply(VariantValue(spec, key, value), options);
+constexpr std::string_view kObjectBuilderKey = "object-builder";
+
+/// The names of the structures for which `uses` holds, for messages ("twolevel or rebraid").
+std::string names_of_structures_using(bool AccelEntry::*uses) {
+    std::string names;
+    for (const AccelEntry& entry : accel_entries())
+        if (entry.*uses) names += (names.empty() ? "" : " or ") + std::string(entry.name);
+    return names;
+}
+
+/// One KEY=VALUE of a variant suffix applied to `options`; a key the structure does not use
+/// is an error rather than a variant identical to the plain structure.
+void apply_variant_setting(std::string_view spec, const AccelEntry& entry, std::string_view key,
+                           std::string_view value, AccelOptions& options) {
+    for (const VariantKey& variant_key : variant_keys()) {
+        if (variant_key.key != key) continue;
+        const bool is_object_builder = key == kObjectBuilderKey;
+        if (is_object_builder ? !entry.has_object_bvhs : !entry.has_rebraid_settings)
+            throw Error("accel '" + std::string(spec) + "': " + std::string(entry.name) +
+                        " does not use " + std::string(key) + "; it is a setting of " +
+                        names_of_structures_using(is_object_builder
+                                                      ? &AccelEntry::has_object_bvhs
+                                                      : &AccelEntry::has_rebraid_settings));
+        return variant_key.setting.apply(VariantValue(spec, key, value), options);
+    }
     throw Error("accel '" + std::string(spec) + "': unknown setting '" + std::string(key) +
                 "'; valid keys: " + accel_variant_keys());
 }
@@ -295,11 +332,16 @@ AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base
         if (equals == std::string_view::npos)
             throw Error("accel '" + std::string(spec) + "': setting '" + std::string(setting) +
                         "' is not KEY=VALUE");
-        apply_variant_setting(spec, setting.substr(0, equals), setting.substr(equals + 1),
-                              variant.options);
+        apply_variant_setting(spec, *variant.entry, setting.substr(0, equals),
+                              setting.substr(equals + 1), variant.options);
         start = end;
     }
-    variant.options.rebraid.validate();
+    try {
+        variant.options.rebraid.validate();
+    } catch (const Error& error) {
+        // Names the --accel text too, since the value may come from it.
+        throw Error("accel '" + std::string(spec) + "': " + error.what());
+    }
     return variant;
 }
 
@@ -312,6 +354,45 @@ std::string accel_variant_keys() {
 
 const AccelEntry& find_accel(std::string_view spec) {
     return *parse_accel_variant(spec).entry;
+}
+
+void check_variants_differ(std::span<const AccelVariant> variants) {
+    for (std::size_t i = 0; i < variants.size(); ++i)
+        for (std::size_t j = i + 1; j < variants.size(); ++j) {
+            const AccelVariant &a = variants[i], &b = variants[j];
+            if (a.entry != b.entry) continue;
+            bool is_same = true;
+            for (const VariantKey& variant_key : variant_keys()) {
+                const bool is_used = variant_key.key == kObjectBuilderKey
+                                         ? a.entry->has_object_bvhs
+                                         : a.entry->has_rebraid_settings;
+                if (is_used && !variant_key.setting.is_same(a.options, b.options)) is_same = false;
+            }
+            if (is_same)
+                throw Error("accel '" + a.label + "' and '" + b.label +
+                            "' build the same structure: their settings are equal (a "
+                            "setting at its default changes nothing), so comparing them shows "
+                            "one structure twice; drop one or give it other settings");
+        }
+}
+
+void check_build_options_used(std::span<const std::string> specs, const AccelOptions& options) {
+    std::string chosen;
+    bool uses_object_bvhs = false, uses_rebraid_settings = false;
+    for (const std::string& spec : specs) {
+        const AccelEntry& entry = find_entry(base_name(spec));
+        uses_object_bvhs = uses_object_bvhs || entry.has_object_bvhs;
+        uses_rebraid_settings = uses_rebraid_settings || entry.has_rebraid_settings;
+        chosen += (chosen.empty() ? "" : ",") + spec;
+    }
+    const auto unused = [&](const std::string& option, bool AccelEntry::*uses) {
+        return Error(option + " applies only to " + names_of_structures_using(uses) +
+                     ", which --accel " + chosen + " does not build");
+    };
+    if (options.is_object_builder_given && !uses_object_bvhs)
+        throw unused("--object-builder", &AccelEntry::has_object_bvhs);
+    if (!options.rebraid_options_given.empty() && !uses_rebraid_settings)
+        throw unused(options.rebraid_options_given.front(), &AccelEntry::has_rebraid_settings);
 }
 
 std::unique_ptr<Accel> build_accel(std::string_view spec, const Scene& scene,

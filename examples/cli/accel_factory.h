@@ -24,13 +24,18 @@ enum class ObjectBuilderKind {
     embree_medium,  ///< rtcBuildBVH at medium quality (binned SAH)
 };
 
-/// Everything the command line can tell the structures' builders. Structures ignore what does
-/// not concern them (the Embree references and `flat` ignore all of it).
+/// Everything the command line can tell the structures' builders. A structure builds with what
+/// concerns it (the Embree references and `flat` with none of it); check_build_options_used()
+/// rejects options the user gave that none of the chosen structures uses.
 struct AccelOptions {
     /// Object BVHs of `twolevel` and `rebraid`.
     ObjectBuilderKind object_builder = ObjectBuilderKind::own;
     /// The re-braiding top-level build (`rebraid` only).
     RebraidSettings rebraid;
+    /// The re-braiding options the command line gave (e.g. "--opening"), in the order given.
+    std::vector<std::string> rebraid_options_given;
+    /// Whether the command line gave --object-builder.
+    bool is_object_builder_given = false;
 };
 
 /// The `--opening` name of `rule` ("extent", "sah", "overlap").
@@ -61,6 +66,8 @@ struct AccelEntry {
     std::unique_ptr<Accel> (*build)(const Scene& scene, const AccelOptions& options);
     /// True when AccelOptions::object_builder changes the structure.
     bool has_object_bvhs = false;
+    /// True when AccelOptions::rebraid changes the structure.
+    bool has_rebraid_settings = false;
 };
 
 /// Every structure `--accel` accepts, in the order `--help` lists them.
@@ -93,6 +100,16 @@ AccelVariant parse_accel_variant(std::string_view spec, const AccelOptions& base
 /// throws rebraid::Error listing the valid names when there is none. Commands call this
 /// before loading a scene, so a typo fails fast.
 const AccelEntry& find_accel(std::string_view spec);
+
+/// Throws rebraid::Error when two of `variants` build the same structure: the same name and
+/// the same settings, such as `rebraid` and `rebraid:opening=sah` while sah is the default. A
+/// comparison would show one structure twice and suggest a difference that is not there.
+void check_variants_differ(std::span<const AccelVariant> variants);
+
+/// Throws rebraid::Error when the command line gave a build option (`--opening`,
+/// `--object-builder`, ...) that none of the structures `specs` names uses, since it would
+/// change nothing.
+void check_build_options_used(std::span<const std::string> specs, const AccelOptions& options);
 
 /// Builds the structure `spec` names over `scene` with `options`, overridden by the spec's
 /// variant suffix (validated first). The scene must outlive the result.

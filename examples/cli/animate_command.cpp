@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "bench_rays.h"
 #include "commands.h"
 #include "embree_glue/reference/embree_dynamic_scene.h"
+#include "option_checks.h"
 #include "output_file.h"
 #include "rebraid/core/error.h"
 #include "rebraid/dynamic/dynamic_scene.h"
@@ -128,8 +130,13 @@ std::vector<UpdateStrategy> chosen_strategies(const AnimateOptions& options) {
     if (options.update_names.empty())
         return {std::begin(kUpdateStrategies), std::end(kUpdateStrategies)};
     std::vector<UpdateStrategy> strategies;
-    for (const std::string& name : options.update_names)
-        strategies.push_back(parse_update_strategy(name));
+    for (const std::string& name : options.update_names) {
+        try {
+            strategies.push_back(parse_update_strategy(name));
+        } catch (const Error& error) {
+            throw Error("--update: " + std::string(error.what()));
+        }
+    }
     return strategies;
 }
 
@@ -145,7 +152,13 @@ std::vector<DynamicTop> chosen_tops(const AnimateOptions& options) {
     if (options.top_names.empty())
         return {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental};
     std::vector<DynamicTop> tops;
-    for (const std::string& name : options.top_names) tops.push_back(parse_dynamic_top(name));
+    for (const std::string& name : options.top_names) {
+        try {
+            tops.push_back(parse_dynamic_top(name));
+        } catch (const Error& error) {
+            throw Error("--top: " + std::string(error.what()));
+        }
+    }
     return tops;
 }
 
@@ -156,11 +169,21 @@ void run_animate(const AnimateOptions& options) {
     const DynamicPlacementSettings placement{.copy_count = options.copy_count,
                                              .size_fraction = options.size_fraction,
                                              .seed = options.seed};
+    if (!(options.size_fraction > 0.0f))
+        throw Error("--size must be more than 0: a copy needs some extent");
     placement.validate();
     RebraidSettings{.budget_factor = options.budget_factor}.validate();
     IncrementalTopSettings{.max_cut_pieces = options.max_cut_pieces}.validate();
     if (!(options.time_step >= 0.0f) || !std::isfinite(options.time_step))
         throw Error("--time-step " + std::to_string(options.time_step) + " must be >= 0");
+    // Files and tools the end needs, so a long run is not lost at the last step.
+    check_scene_file(options.static_path);
+    if (!options.dynamic_path.empty()) check_scene_file(options.dynamic_path);
+    check_output_file(options.csv_path, "CSV file");
+    if (!options.plot_path.empty()) {
+        check_plot_tools();
+        check_output_file(options.plot_path, "plot");
+    }
 
     const Scene static_scene = load_scene(options.static_path);
     std::unique_ptr<AnimatedObject> object;
@@ -242,6 +265,12 @@ void run_animate(const AnimateOptions& options) {
 
     if (!options.csv_path.empty())
         write_output(options.csv_path, [&](std::ostream& out) { write_animate_csv(out, results); });
+    // The summary first: whatever happens to the plot, the measurements are not lost.
+    if (options.is_json)
+        std::cout << animate_summary_json(results).dump(2) << "\n";
+    else
+        print_animate_table(std::cout, results);
+    std::cout.flush();
     if (!options.plot_path.empty()) {
         std::string csv = options.csv_path;
         std::filesystem::path temporary;
@@ -260,10 +289,6 @@ void run_animate(const AnimateOptions& options) {
         }
         if (!temporary.empty()) std::filesystem::remove(temporary);
     }
-    if (options.is_json)
-        std::cout << animate_summary_json(results).dump(2) << "\n";
-    else
-        print_animate_table(std::cout, results);
 }
 
 }  // namespace
@@ -286,15 +311,15 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
                      "animated scene (.gltf/.glb; default: a built-in twisting object)")
         ->type_name("D.glb");
     command->add_option("--copies", options->copy_count, "copies of the animated scene")
-        ->check(CLI::Range(std::size_t(1), std::size_t(4096)))
+        ->check(whole_number(1, 4096))
         ->capture_default_str()
         ->type_name("K");
     command->add_option("--frames", options->frame_count, "frames to run")
-        ->check(CLI::Range(1, 1000000))
+        ->check(whole_number(1, 1000000))
         ->capture_default_str()
         ->type_name("F");
     command->add_option("--time-step", options->time_step, "seconds of animation per frame")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_at_least(0))
         ->capture_default_str()
         ->type_name("DT");
     command
@@ -313,32 +338,36 @@ void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& ac
     command
         ->add_option("--budget-factor", options->budget_factor,
                      "extra BRefs per instance of the re-braided tops (paper: 4)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_between(0, 1e6))
         ->capture_default_str()
         ->type_name("F");
     command
         ->add_option("--max-cut", options->max_cut_pieces,
                      "rebraid-incremental: most pieces of the static top each frame's upper "
                      "build takes")
-        ->check(CLI::Range(std::uint32_t(1), NodeRef::kMaxFirst))
+        ->check(whole_number(1, NodeRef::kMaxFirst))
         ->capture_default_str()
         ->type_name("N");
-    command->add_flag("!--no-embree", options->has_embree, "leave out the Embree methods");
+    command->add_flag_callback(
+        "--no-embree", [options] { options->has_embree = false; }, "leave out the Embree methods");
     add_object_builder_option(*command, "--static-builder", options->static_builder,
                               "BVHs of the static meshes in twolevel and rebraid methods (built "
                               "once)");
     command->add_option("--width", options->width, "image width of the rendered frame")
-        ->check(CLI::Range(1, 32768))
+        ->check(whole_number(1, 32768))
         ->capture_default_str();
     command->add_option("--height", options->height, "image height of the rendered frame")
-        ->check(CLI::Range(1, 32768))
+        ->check(whole_number(1, 32768))
         ->capture_default_str();
     command
         ->add_option("--size", options->size_fraction,
-                     "largest extent of a copy over the static scene's largest extent")
+                     "largest extent of a copy over the static scene's largest extent (more "
+                     "than 0, at most 1)")
+        ->check(number_between(0, 1))
         ->capture_default_str()
         ->type_name("FRACTION");
     command->add_option("--seed", options->seed, "seed of the placement and the diffuse rays")
+        ->check(whole_number(0, std::numeric_limits<std::int64_t>::max()))
         ->capture_default_str();
     command->add_flag("--json", options->is_json,
                       "print one JSON array: an object per method (method, mean_frame_ms, "

@@ -15,6 +15,9 @@ namespace rebraid::cli {
 
 namespace {
 
+/// The Python that plots: Debian's, which python3-matplotlib installs into.
+constexpr const char* kPython = "/usr/bin/python3";
+
 struct MethodSummary {
     double mean_frame = 0, max_frame = 0, mean_animation = 0, mean_update = 0, mean_top = 0,
            mean_render = 0;
@@ -121,20 +124,28 @@ void print_animate_table(std::ostream& out, const std::vector<AnimateMethodResul
     }
 }
 
-void plot_animate_csv(const std::string& csv_path, const std::string& png_path) {
-    const char* python = "/usr/bin/python3";
+void check_plot_tools() {
     std::error_code error;
-    if (!std::filesystem::exists(python, error))
-        throw Error("--plot: " + std::string(python) +
-                    " not found (install Debian's python3-matplotlib)");
-    if (std::system((std::string(python) + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0)
-        throw Error("--plot: matplotlib is missing for " + std::string(python) +
-                    " (install Debian's python3-matplotlib)");
+    if (!std::filesystem::exists(kPython, error))
+        throw Error("--plot needs " + std::string(kPython) +
+                    ", which is missing: install Debian's python3-matplotlib "
+                    "(bash scripts/install-deps.sh does), or leave out --plot");
+    if (std::system((std::string(kPython) + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) !=
+        0)
+        throw Error("--plot needs matplotlib for " + std::string(kPython) +
+                    ", which is missing: install Debian's python3-matplotlib "
+                    "(bash scripts/install-deps.sh does), or leave out --plot");
     const std::filesystem::path script = find_plot_script();
     if (!std::filesystem::exists(script, error))
-        throw Error("--plot: plot script '" + script.string() +
-                    "' not found (set REBRAID_PLOT_SCRIPT to bench/plot_animate.py)");
-    const std::string command = std::string(python) + " " + shell_quote(script.string()) + " " +
+        throw Error("--plot needs the plot script '" + script.string() +
+                    "', which is missing: run from the repository root, or set "
+                    "REBRAID_PLOT_SCRIPT to bench/plot_animate.py");
+}
+
+void plot_animate_csv(const std::string& csv_path, const std::string& png_path) {
+    check_plot_tools();
+    const std::string command = std::string(kPython) + " " +
+                                shell_quote(find_plot_script().string()) + " " +
                                 shell_quote(csv_path) + " " + shell_quote(png_path);
     if (std::system(command.c_str()) != 0) throw Error("--plot: '" + command + "' failed");
 }

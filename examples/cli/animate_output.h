@@ -38,6 +38,10 @@ nlohmann::ordered_json animate_summary_json(const std::vector<AnimateMethodResul
 /// The summary as a table for people.
 void print_animate_table(std::ostream& out, const std::vector<AnimateMethodResult>& results);
 
+/// Throws rebraid::Error saying what to install when /usr/bin/python3, its matplotlib or
+/// bench/plot_animate.py is missing; `animate --plot` calls it before the first frame.
+void check_plot_tools();
+
 /// Plots frame times from the CSV at `csv_path` into `png_path` with bench/plot_animate.py
 /// and /usr/bin/python3. Throws rebraid::Error when the script, python or matplotlib is
 /// missing or the script fails.

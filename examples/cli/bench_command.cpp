@@ -6,8 +6,10 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -18,8 +20,10 @@
 #include "bench_rays.h"
 #include "commands.h"
 #include "embree_glue/reference/embree_reference.h"
+#include "option_checks.h"
 #include "scene_source.h"
 #include "stats_json.h"
+#include "status_line.h"
 
 namespace rebraid::cli {
 
@@ -178,23 +182,33 @@ void print_result_row(const BenchResult& result, int name_width) {
 }
 
 void run_bench(const BenchOptions& options) {
-    // Check every name and setting before the first (slow) scene load.
+    // Check every name, setting and scene file before the first (slow) scene load.
     options.accel_options.rebraid.validate();
+    check_build_options_used(options.accel_names, options.accel_options);
     std::vector<AccelVariant> variants;
     int name_width = 18;
     for (const std::string& name : options.accel_names) {
         variants.push_back(parse_accel_variant(name, options.accel_options));
         name_width = std::max(name_width, int(row_name(variants.back()).size()));
     }
+    check_variants_differ(variants);
 
     std::vector<std::string> scene_paths = options.scene_paths;
     if (scene_paths.empty()) scene_paths.emplace_back();
-    for (std::string& path : scene_paths)
+    for (std::string& path : scene_paths) {
         if (path == kDefaultSceneToken) path.clear();  // load_scene's name for it
+        check_scene_file(path);
+    }
     nlohmann::ordered_json all_results = nlohmann::ordered_json::array();
-    for (const std::string& path : scene_paths) {
-        const Scene scene = load_scene(path);
+    StatusLine status;
+    for (std::size_t scene_index = 0; scene_index < scene_paths.size(); ++scene_index) {
+        const std::string& path = scene_paths[scene_index];
         const std::string scene_name = describe_scene(path);
+        const std::string scene_step = "bench: scene " + std::to_string(scene_index + 1) + "/" +
+                                       std::to_string(scene_paths.size()) + " (" + scene_name + ")";
+        status.show(scene_step + ": loading");
+        const Scene scene = load_scene(path);
+        status.show(scene_step + ": making rays");
         BenchRays rays;
         {
             // Embree's instanced scene finds the hit points: it fits in memory for every
@@ -202,17 +216,28 @@ void run_bench(const BenchOptions& options) {
             const glue::EmbreeInstancedAccel reference(scene);
             rays = make_bench_rays(scene, reference, options.rays);
         }
+        status.clear();
         if (!options.is_json) print_scene_header(scene_name, scene, rays, options, name_width);
-        for (const AccelVariant& variant : variants) {
+        for (std::size_t v = 0; v < variants.size(); ++v) {
+            const AccelVariant& variant = variants[v];
+            const std::string step = scene_step + ", " + variant.label + " (" +
+                                     std::to_string(v + 1) + "/" + std::to_string(variants.size()) +
+                                     "): ";
             BenchResult result{scene_name, &variant, {}, {}, {}, {}};
             {
+                status.show(step + "building");
                 const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);
                 result.stats = accel->stats();
+                status.show(step + "timing primary rays");
                 result.primary = time_closest_hits(*accel, rays.primary, options.repetitions);
+                status.show(step + "timing diffuse rays");
                 result.diffuse = time_closest_hits(*accel, rays.diffuse, options.repetitions);
-                if (options.is_json)
+                if (options.is_json) {
+                    status.show(step + "counting work per ray");
                     result.diffuse_work = count_closest_hit_work(*accel, rays.diffuse);
+                }
             }  // freed before the next structure is built
+            status.clear();
             if (options.is_json)
                 all_results.push_back(result_to_json(result, rays, options));
             else
@@ -251,15 +276,16 @@ void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& acti
     command
         ->add_option("--rays", options->rays.ray_count,
                      "primary rays, one per pixel of a 16:9 image; as many diffuse rays")
-        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 30))
+        ->check(whole_number(1, std::int64_t{1} << 30))
         ->capture_default_str()
         ->type_name("N");
     command
         ->add_option("--repetitions", options->repetitions,
                      "timed runs per ray set after one warm-up; the median counts")
-        ->check(CLI::Range(1, 1000))
+        ->check(whole_number(1, 1000))
         ->capture_default_str();
     command->add_option("--seed", options->rays.seed, "seed of the diffuse directions")
+        ->check(whole_number(0, std::numeric_limits<std::int64_t>::max()))
         ->capture_default_str();
     command->add_flag("--json", options->is_json,
                       "print one JSON array: an object per scene and structure (scene, accel, "

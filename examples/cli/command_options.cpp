@@ -6,13 +6,15 @@
 
 #include "accel_factory.h"
 #include "commands.h"
+#include "option_checks.h"
 
 namespace rebraid::cli {
 
 void add_common_options(CLI::App& command, CommonOptions& common) {
     command.add_option("--threads", common.threads, "worker threads (0 = all cores)")
-        ->check(CLI::Range(0, 4096))
-        ->capture_default_str();
+        ->check(whole_number(0, 4096))
+        ->capture_default_str()
+        ->type_name("N");
 }
 
 void add_accel_option(CLI::App& command, std::string& accel_name) {
@@ -27,14 +29,13 @@ void add_accel_option(CLI::App& command, std::string& accel_name) {
         ->type_name("NAME");
 }
 
-void add_object_builder_option(CLI::App& command, const std::string& option,
-                               ObjectBuilderKind& target, const std::string& what) {
+CLI::Option* add_object_builder_option(CLI::App& command, const std::string& option,
+                                       ObjectBuilderKind& target, const std::string& what) {
     std::vector<std::string> names;
     for (ObjectBuilderKind kind : object_builder_kinds())
         names.emplace_back(object_builder_name(kind));
-    std::string joined;
-    for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
-    command
+    const std::string joined = join_names(names);
+    return command
         .add_option_function<std::string>(
             option,
             [&target](const std::string& name) {
@@ -44,7 +45,7 @@ void add_object_builder_option(CLI::App& command, const std::string& option,
             what + ": " + joined + " (default " + std::string(object_builder_name(target)) +
                 "); embree-high is rtcBuildBVH with spatial splits, so a triangle may sit in "
                 "several leaves")
-        ->check(CLI::IsMember(names))
+        ->check(one_of(names))
         ->type_name("NAME");
 }
 
@@ -55,13 +56,13 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         .add_option("--open-threshold", options.rebraid.open_threshold,
                     "rebraid: open a BRef whose extent along its segment's largest axis exceeds "
                     "this fraction of the segment's (paper 4.2)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_at_least(0))
         ->capture_default_str()
         ->type_name("X");
     command
         .add_option("--budget-factor", options.rebraid.budget_factor,
                     "rebraid: extra BRefs per instance (paper 5.2; 0 = the plain two-level top)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_between(0, 1e6))
         ->capture_default_str()
         ->type_name("B");
     const std::map<std::string, BudgetRule> budget_rules{{"instances", BudgetRule::per_instance},
@@ -72,13 +73,13 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
                     "the paper's rule for instanced scenes) or primitives (instanced "
                     "primitives / --primitives-per-bref, its rule for objects in world space; "
                     "paper 5.2)")
-        ->transform(CLI::CheckedTransformer(budget_rules, CLI::ignore_case))
+        ->transform(named_value(budget_rules))
         ->default_str("instances")
         ->type_name("RULE");
     command
         .add_option("--primitives-per-bref", options.rebraid.primitives_per_bref,
                     "rebraid: primitives per extra BRef under --budget-rule primitives")
-        ->check(CLI::PositiveNumber)
+        ->check(number_at_least(1))
         ->capture_default_str()
         ->type_name("P");
     std::map<std::string, BRefBoundsRule> bounds_rules;
@@ -89,7 +90,7 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
                     "rebraid: world boxes of instanced BRefs: box (the node's box transformed, "
                     "paper 5.4), children (union of its transformed children: tighter) or "
                     "vertices (box of its transformed vertices: tight)")
-        ->transform(CLI::CheckedTransformer(bounds_rules, CLI::ignore_case))
+        ->transform(named_value(bounds_rules))
         ->default_str(std::string(bref_bounds_rule_name(options.rebraid.bounds_rule)))
         ->type_name("RULE");
     std::map<std::string, OpeningRule> opening_names;
@@ -101,7 +102,7 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
                     "paper's candidates, opened only where the estimated SAH falls, with real "
                     "child primitive counts) or overlap (candidates overlapping other "
                     "instances' BRefs by --overlap-threshold, then the SAH test)")
-        ->transform(CLI::CheckedTransformer(opening_names, CLI::ignore_case))
+        ->transform(named_value(opening_names))
         ->default_str(std::string(opening_rule_name(options.rebraid.opening_rule)))
         ->type_name("RULE");
     command.add_flag("--open-leaves", options.rebraid.open_leaves,
@@ -111,14 +112,14 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         .add_option("--instance-entry-cost", options.rebraid.instance_entry_cost,
                     "rebraid, --opening sah|overlap: SAH cost of one more instance entry (ray "
                     "transform) per unit of BRef area, relative to a node visit")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_at_least(0))
         ->capture_default_str()
         ->type_name("C");
     command
         .add_option("--estimate-levels", options.rebraid.estimate_levels,
                     "rebraid, --opening sah|overlap: wide top-level levels the SAH estimate "
                     "builds before assuming lower nodes as large as their parent")
-        ->check(CLI::Range(0, 8))
+        ->check(whole_number(0, 8))
         ->capture_default_str()
         ->type_name("L");
     command
@@ -126,16 +127,25 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
                     "rebraid: also build with the budget doubled, up to this many times while "
                     "each doubling lowers the exact SAH cost by 1 % of the top level's own, "
                     "and keep the cheapest build (0: build once)")
-        ->check(CLI::Range(0, 16))
+        ->check(whole_number(0, 16))
         ->capture_default_str()
         ->type_name("D");
     command
         .add_option("--overlap-threshold", options.rebraid.overlap_threshold,
                     "rebraid, --opening overlap: least fraction of a BRef's box shared with "
                     "other instances' BRefs for it to be a candidate")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_at_least(0))
         ->capture_default_str()
         ->type_name("F");
+    // Which options the user gave, so a command can reject those none of its structures uses.
+    command.parse_complete_callback([&command, &options] {
+        options.is_object_builder_given = command.count("--object-builder") > 0;
+        for (const char* name :
+             {"--open-threshold", "--budget-factor", "--budget-rule", "--primitives-per-bref",
+              "--bref-bounds", "--opening", "--open-leaves", "--instance-entry-cost",
+              "--estimate-levels", "--budget-doublings", "--overlap-threshold"})
+            if (command.count(name) > 0) options.rebraid_options_given.emplace_back(name);
+    });
 }
 
 }  // namespace rebraid::cli

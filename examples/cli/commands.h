@@ -5,7 +5,8 @@
 
 namespace CLI {
 class App;
-}
+class Option;
+}  // namespace CLI
 
 namespace rebraid::cli {
 
@@ -28,13 +29,14 @@ void add_common_options(CLI::App& command, CommonOptions& common);
 /// Adds `--accel NAME` to `command`, bound to `accel_name` (help lists the valid names).
 void add_accel_option(CLI::App& command, std::string& accel_name);
 
-/// Adds `--object-builder`, `--open-threshold` and `--budget-factor`, bound to `options`.
+/// Adds `--object-builder` and the re-braiding options (`--open-threshold`, `--opening`, ...),
+/// bound to `options`, which also records which of them the user gave.
 void add_accel_build_options(CLI::App& command, AccelOptions& options);
 
 /// Adds `option` (e.g. "--object-builder") choosing an object-BVH builder by name into
 /// `target`, its help text `what` followed by the names and the default.
-void add_object_builder_option(CLI::App& command, const std::string& option,
-                               ObjectBuilderKind& target, const std::string& what);
+CLI::Option* add_object_builder_option(CLI::App& command, const std::string& option,
+                                       ObjectBuilderKind& target, const std::string& what);
 
 /// Each registers one subcommand on `app`; when it is chosen, `action` is set to its work.
 void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& action);

@@ -1,19 +1,24 @@
 // `rebraid generate KIND -o FILE.glb [--instances N] [--seed S] [--placement P]`: write a
 // generated scene.
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 
 #include "commands.h"
+#include "option_checks.h"
 #include "output_file.h"
+#include "rebraid/core/error.h"
 #include "rebraid/generators/scene_generators.h"
 #include "rebraid/io/gltf_writer.h"
+#include "status_line.h"
 
 namespace rebraid::cli {
 
@@ -34,6 +39,14 @@ double milliseconds_since(std::chrono::steady_clock::time_point start) {
 
 void run_generate(const GenerateOptions& options) {
     const SceneKind kind = parse_scene_kind(options.kind_name);
+    std::string extension = std::filesystem::path(options.output_path).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension != ".glb" && extension != ".gltf")
+        throw Error("output file '" + options.output_path +
+                    "' must end in .glb (one binary file) or .gltf (JSON plus a .bin file)");
+    check_output_file(options.output_path, "scene file");
+    StatusLine status;
+    status.show("generate: making " + options.kind_name);
     const auto generate_start = std::chrono::steady_clock::now();
     const Scene scene = generate_scene(kind, {.placement = options.placement,
                                               .instance_count = options.instance_count,
@@ -41,9 +54,11 @@ void run_generate(const GenerateOptions& options) {
     const double generate_ms = milliseconds_since(generate_start);
 
     create_parent_directories(options.output_path);
+    status.show("generate: writing " + options.output_path);
     const auto write_start = std::chrono::steady_clock::now();
     write_gltf_scene(scene, options.output_path);
     const double write_ms = milliseconds_since(write_start);
+    status.clear();
 
     std::error_code error;
     const std::uintmax_t file_bytes = std::filesystem::file_size(options.output_path, error);
@@ -84,9 +99,11 @@ void add_generate_command(CLI::App& app, CommonOptions& common, CommandAction& a
     command
         ->add_option("--instances", options->instance_count,
                      "number of instances (0 = the kind's default)")
-        ->check(CLI::Range(std::uint32_t{0}, kMaxGeneratedInstances))
+        ->check(whole_number(0, kMaxGeneratedInstances))
         ->capture_default_str();
-    command->add_option("--seed", options->seed, "random seed")->capture_default_str();
+    command->add_option("--seed", options->seed, "random seed")
+        ->check(whole_number(0, std::numeric_limits<std::int64_t>::max()))
+        ->capture_default_str();
     const std::map<std::string, ObjectPlacement> placements{
         {"kind", ObjectPlacement::kind_default},
         {"instanced", ObjectPlacement::instanced},
@@ -96,7 +113,7 @@ void add_generate_command(CLI::App& app, CommonOptions& common, CommandAction& a
                      "kind: the family's own (world-space for crown and powerplant, as in the "
                      "paper; instanced for the rest); instanced: shared meshes placed by "
                      "transforms; world-space: every object its own mesh, identity transforms")
-        ->transform(CLI::CheckedTransformer(placements, CLI::ignore_case))
+        ->transform(named_value(placements))
         ->default_str("kind");
     // Accepted like every subcommand's; generation itself is sequential.
     add_common_options(*command, common);

@@ -4,6 +4,7 @@
 #include <exception>
 #include <iostream>
 #include <optional>
+#include <string>
 
 #include "commands.h"
 #include "rebraid/core/error.h"
@@ -13,7 +14,12 @@ int main(int argc, char** argv) {
     std::ios::sync_with_stdio(false);
 
     CLI::App app{"rebraid: re-braided two-level BVHs for instanced scenes"};
+    app.set_version_flag("--version", std::string("rebraid ") + REBRAID_VERSION);
     app.require_subcommand(1);
+    // Parse errors read like every other error: "rebraid: --width: 'abc' is not a whole number".
+    app.failure_message([](const CLI::App*, const CLI::Error& error) {
+        return "rebraid: " + std::string(error.what()) + "\nRun with --help for the options.\n";
+    });
     app.footer(
         "A SCENE is a .gltf or .glb file; without one, commands use the built-in "
         "default scene.\nRun 'rebraid COMMAND --help' for a command's options.");

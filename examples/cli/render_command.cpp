@@ -8,13 +8,16 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "accel_factory.h"
 #include "commands.h"
+#include "option_checks.h"
 #include "output_file.h"
 #include "rebraid/core/error.h"
 #include "rebraid/generators/default_scene.h"
@@ -53,6 +56,7 @@ struct RenderOptions {
     float time_step = 1.0f / 24.0f;
     int animation_id = 0;
     std::optional<float> start_time;  ///< --time: pose the animation at this time first
+    std::set<std::string> given;      ///< the options on the command line ("--mode", ...)
 };
 
 /// The scene, and what its glTF file says beyond the geometry (empty for the default scene).
@@ -100,9 +104,17 @@ std::vector<std::string> structure_names(const RenderOptions& options) {
                                          : options.compare_names;
 }
 
+/// The animation option the user gave, for messages.
+std::string animation_option(const RenderOptions& options) {
+    return options.frame_count > 0 ? "--frames" : "--time";
+}
+
 RenderScene load_render_scene(const RenderOptions& options) {
     RenderScene result;
     if (is_default_scene(options.scene_path)) {
+        if (options.frame_count > 0 || options.start_time)
+            throw Error(animation_option(options) +
+                        " plays a glTF animation; the default scene has no animation");
         result.loaded.scene = make_default_scene();
         result.loaded.scene.validate();
         return result;
@@ -122,10 +134,14 @@ RenderScene load_render_scene(const RenderOptions& options) {
         viewer::SurfaceMaterials::from_gltf(result.loaded, options.scene_path, warnings);
     for (const std::string& warning : warnings)
         std::cerr << "rebraid: warning: " << warning << "\n";
-    if (options.frame_count > 0 || options.start_time)
+    if (options.frame_count > 0 || options.start_time) {
         result.animator.emplace(result.loaded,
                                 GltfAnimationSettings{.animation = options.animation_id,
                                                       .file_label = options.scene_path});
+        if (!result.animator->animated())
+            throw Error(animation_option(options) + " plays a glTF animation; nothing in '" +
+                        options.scene_path + "' is animated");
+    }
     return result;
 }
 
@@ -209,15 +225,50 @@ FrameResult render_frame(const RenderOptions& options, const Scene& scene,
     return frame;
 }
 
+/// Refuses options the chosen mode would ignore, since the image would not show them.
+void check_options_apply(const RenderOptions& options) {
+    const auto given = [&](const char* name) { return options.given.contains(name); };
+    const bool is_compare = !options.compare_names.empty();
+    if (is_compare && given("--mode") && options.mode_name != kHeatmapModeName)
+        throw Error("--compare draws heatmaps side by side, so --mode " + options.mode_name +
+                    " does not apply; leave out --mode, or --compare to render one structure");
+    if (is_compare && given("--accel"))
+        throw Error(
+            "--compare names the structures to draw, so --accel does not apply; list "
+            "every structure in --compare");
+    if (!is_heatmap(options) && given("--heat"))
+        throw Error("--heat chooses what a heatmap shows; it needs --mode heatmap or --compare");
+    if (given("--bounces") && (is_heatmap(options) || options.mode_name != "path"))
+        throw Error("--bounces applies to --mode path only");
+    if (given("--spp") && (is_heatmap(options) || options.mode_name == "normals"))
+        throw Error("--spp applies to --mode ao and --mode path only");
+    if (options.frame_count == 0 && given("--time-step"))
+        throw Error("--time-step is the time between frames; it needs --frames");
+    if (options.frame_count == 0 && !options.start_time && given("--animation"))
+        throw Error("--animation chooses what --frames or --time plays; it needs one of them");
+}
+
 void run_render(RenderOptions options) {
     // Everything that can be checked before the slow part is checked first.
-    for (const std::string& name : structure_names(options)) find_accel(name);
+    const std::vector<std::string> names = structure_names(options);
+    for (const std::string& name : names) find_accel(name);
+    check_build_options_used(names, options.accel_options);
+    std::vector<AccelVariant> variants;
+    for (const std::string& name : names)
+        variants.push_back(parse_accel_variant(name, options.accel_options));
+    check_variants_differ(variants);
+    check_options_apply(options);
     if (!is_heatmap(options)) options.render.mode = parse_mode(options.mode_name);
     parse_heat_metric(options.heat_metric_name);
     options.render.validate();
     if (options.frame_count > 0 && !(options.time_step >= 0.0f && std::isfinite(options.time_step)))
         throw Error("--time-step " + std::to_string(options.time_step) + " must be >= 0");
     viewer::check_image_format(options.image_path);
+    check_scene_file(options.scene_path);
+    check_output_file(options.frame_count > 0
+                          ? numbered_path(options.image_path, 0, options.frame_count)
+                          : options.image_path,
+                      "output image");
     viewer::CameraRequest camera_request;
     if (options.camera_id >= 0) camera_request.gltf_camera_id = options.camera_id;
     camera_request.look_from = point_option(options.look_from, "--look-from");
@@ -232,8 +283,19 @@ void run_render(RenderOptions options) {
     if (render_scene.animator) render_scene.animator->apply(start_time, scene);
     const float aspect = static_cast<float>(options.render.width) / options.render.height;
     // Chosen on the first frame's pose and kept, so an animation does not jump around.
-    const viewer::CameraChoice camera =
+    viewer::CameraChoice camera =
         viewer::choose_camera(scene, render_scene.cameras, camera_request, aspect);
+    // A file's own camera may frame the model differently from what the user expects (it may
+    // crop it): say how to pick another.
+    const bool is_file_camera_by_default = !render_scene.cameras.empty() && options.camera_id < 0 &&
+                                           options.look_from.empty() && options.look_at.empty() &&
+                                           options.fov_degrees == 0.0f;
+    if (is_file_camera_by_default)
+        camera.description +=
+            render_scene.cameras.size() == 1
+                ? std::string(" (the file's own; --fov or --look-from X,Y,Z for another view)")
+                : " (the first of the file's " + std::to_string(render_scene.cameras.size()) +
+                      "; --camera N, --fov or --look-from X,Y,Z for another view)";
 
     const int frame_count = std::max(1, options.frame_count);
     const std::uint64_t rows_per_frame =
@@ -293,36 +355,38 @@ void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& act
         ->add_option("--mode", options->mode_name,
                      "ao (ambient occlusion), path (diffuse path tracing, glTF base colours and "
                      "textures), normals, heatmap (nodes visited + triangles tested per pixel)")
-        ->check(CLI::IsMember({"ao", "path", "normals", kHeatmapModeName}))
+        ->check(one_of({"ao", "path", "normals", kHeatmapModeName}))
         ->capture_default_str();
     command->add_option("--width", options->render.width, "image width in pixels")
-        ->check(CLI::Range(1, 32768))
+        ->check(whole_number(1, 32768))
         ->capture_default_str();
     command->add_option("--height", options->render.height, "image height in pixels")
-        ->check(CLI::Range(1, 32768))
+        ->check(whole_number(1, 32768))
         ->capture_default_str();
     command
         ->add_option("--spp", options->render.samples_per_pixel,
                      "samples per pixel: ambient-occlusion rays (ao) or paths (path)")
-        ->check(CLI::Range(1, 65536))
+        ->check(whole_number(1, 65536))
         ->capture_default_str();
     command
         ->add_option("--bounces", options->render.max_bounces,
                      "path: diffuse bounces after the first hit")
-        ->check(CLI::Range(0, 64))
+        ->check(whole_number(0, 64))
         ->capture_default_str();
     command->add_option("--seed", options->render.seed, "seed of the per-pixel samples")
+        ->check(whole_number(0, std::numeric_limits<std::int64_t>::max()))
         ->capture_default_str();
     command
         ->add_option("--camera", options->camera_id,
                      "use glTF camera N (index in the file's cameras) instead of the first one")
-        ->check(CLI::NonNegativeNumber)
+        ->check(whole_number(0, 1 << 30))
         ->type_name("N");
     command
         ->add_option("--look-from", options->look_from,
                      "camera position X Y Z (or X,Y,Z); looks at --look-at or the scene centre")
         ->expected(3)
         ->delimiter(',')
+        ->check(finite_number())
         ->type_name("X Y Z");
     command
         ->add_option("--look-at", options->look_at,
@@ -330,9 +394,10 @@ void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& act
                      "unless --look-from is given")
         ->expected(3)
         ->delimiter(',')
+        ->check(finite_number())
         ->type_name("X Y Z");
     command->add_option("--fov", options->fov_degrees, "vertical field of view in degrees")
-        ->check(CLI::Range(0.01f, 179.0f))
+        ->check(number_between(0.01, 179))
         ->type_name("DEGREES");
     command
         ->add_option("--compare", options->compare_names,
@@ -343,34 +408,39 @@ void add_render_command(CLI::App& app, CommonOptions& common, CommandAction& act
     command
         ->add_option("--heat", options->heat_metric_name,
                      "heatmap value: total (nodes + triangles), nodes or triangles")
-        ->check(CLI::IsMember({"total", "nodes", "triangles"}))
+        ->check(one_of({"total", "nodes", "triangles"}))
         ->capture_default_str();
     command
         ->add_option("--frames", options->frame_count,
                      "render F frames of the glTF animation to numbered images "
                      "(IMAGE_0000.png, ...)")
-        ->check(CLI::Range(1, 1000000))
+        ->check(whole_number(1, 1000000))
         ->type_name("F");
     command
         ->add_option("--time-step", options->time_step,
                      "seconds of animation between frames (with --frames)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_at_least(0))
         ->capture_default_str()
         ->type_name("DT");
     command
         ->add_option("--time", options->start_time,
                      "pose the scene at T seconds of its glTF animation (the first frame's time "
                      "with --frames)")
+        ->check(finite_number())
         ->type_name("T");
     command
         ->add_option("--animation", options->animation_id,
                      "glTF animation to play with --frames or --time (-1 = all at once)")
-        ->check(CLI::Range(-1, 1 << 30))
+        ->check(whole_number(-1, 1 << 30))
         ->capture_default_str();
     add_accel_option(*command, options->accel_name);
     add_accel_build_options(*command, options->accel_options);
     add_common_options(*command, common);
-    command->callback([options, &action] { action = [options] { run_render(*options); }; });
+    command->callback([options, command, &action] {
+        for (const CLI::Option* option : command->get_options())
+            if (option->count() > 0) options->given.insert(option->get_name());
+        action = [options] { run_render(*options); };
+    });
 }
 
 }  // namespace rebraid::cli

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "output_file.h"
 #include "rebraid/core/error.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/io/gltf_animation.h"
@@ -27,21 +28,22 @@ bool is_default_scene(const std::string& path) {
     return path.empty() || path == kDefaultSceneName;
 }
 
+void check_scene_file(const std::string& path) {
+    if (is_default_scene(path)) return;
+    // Checked here so the message is the same for every loader and names the user's path.
+    check_input_file(path, "scene file");
+    const std::string extension = lowercase_extension(path);
+    if (extension != ".gltf" && extension != ".glb")
+        throw Error("scene file '" + path + "' is not a .gltf or .glb file");
+}
+
 Scene load_scene(const std::string& path) {
     if (is_default_scene(path)) {
         Scene scene = make_default_scene();
         scene.validate();
         return scene;
     }
-    // Checked here so the message is the same for every loader and names the user's path.
-    std::error_code error;
-    if (!std::filesystem::exists(path, error))
-        throw Error("scene file '" + path + "' does not exist");
-    if (std::filesystem::is_directory(path, error))
-        throw Error("scene file '" + path + "' is a directory");
-    const std::string extension = lowercase_extension(path);
-    if (extension != ".gltf" && extension != ".glb")
-        throw Error("scene file '" + path + "' is not a .gltf or .glb file");
+    check_scene_file(path);
     Scene scene = load_gltf_scene(path);
     scene.validate();
     return scene;
@@ -50,11 +52,15 @@ Scene load_scene(const std::string& path) {
 Scene load_scene_at_time(const std::string& path, float time, int animation) {
     if (!std::isfinite(time))
         throw Error("--time " + std::to_string(time) + " is not a finite number of seconds");
-    if (is_default_scene(path)) return load_scene(path);
-    load_scene(path);  // the common messages for missing, misnamed or broken files
+    // A time on a scene that does not move would be accepted and change nothing.
+    if (is_default_scene(path))
+        throw Error("--time poses an animated glTF scene; the default scene has no animation");
+    check_scene_file(path);
     GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
     const GltfAnimator animator(loaded,
                                 GltfAnimationSettings{.animation = animation, .file_label = path});
+    if (!animator.animated())
+        throw Error("--time poses an animated glTF scene; nothing in '" + path + "' is animated");
     animator.apply(time, loaded.scene);
     loaded.scene.validate();
     return std::move(loaded.scene);

@@ -6,6 +6,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -14,6 +16,7 @@
 #include "commands.h"
 #include "scene_source.h"
 #include "stats_json.h"
+#include "status_line.h"
 
 namespace rebraid::cli {
 
@@ -26,18 +29,33 @@ struct StatsOptions {
     bool is_json = false;
 };
 
+/// What a value means where its name alone does not say, printed after it.
+std::string_view stats_field_note(std::string_view key) {
+    if (key == "sah") return "SAH cost of the whole structure (docs/design.md)";
+    if (key == "brefs") return "top-level references: one per instance, plus those opening added";
+    if (key == "budget") return "extra BRefs opening may add beyond one per instance";
+    if (key == "opened") return "BRefs opened into their children";
+    return {};
+}
+
 void print_stats_text(std::ostream& out, const std::string& scene_name,
                       const std::string& accel_name, const AccelStats& stats) {
     constexpr int kKeyWidth = 16;
+    constexpr int kValueWidth = 22;
     out << std::left << std::setw(kKeyWidth) << "scene" << scene_name << "\n"
         << std::setw(kKeyWidth) << "accel" << accel_name << "\n";
     auto print_value = [&](std::string_view key, auto value) {
-        out << std::setw(kKeyWidth) << key;
+        std::ostringstream text;
         if constexpr (std::is_floating_point_v<decltype(value)>)
-            out << std::fixed << std::setprecision(key.ends_with("_ms") ? 3 : 6) << value
-                << std::defaultfloat;
+            text << std::fixed << std::setprecision(key.ends_with("_ms") ? 3 : 6) << value;
         else
-            out << value;
+            text << value;
+        out << std::setw(kKeyWidth) << key;
+        const std::string_view note = stats_field_note(key);
+        if (note.empty())
+            out << text.str();
+        else
+            out << std::setw(kValueWidth) << text.str() << note;
         out << "\n";
     };
     for_each_stats_field(stats, [&](std::string_view key, const auto& value) {
@@ -53,10 +71,16 @@ void run_stats(const StatsOptions& options) {
     // The variant's own options (a NAME:KEY=VALUE suffix overrides the command line's), so the
     // JSON names the object builder that actually built the structure.
     options.accel_options.rebraid.validate();
+    check_build_options_used(std::span(&options.accel_name, 1), options.accel_options);
     const AccelVariant variant = parse_accel_variant(options.accel_name, options.accel_options);
+    check_scene_file(options.scene_path);
+    StatusLine status;
+    status.show("stats: loading " + describe_scene(options.scene_path));
     const Scene scene = load_scene(options.scene_path);
+    status.show("stats: building " + options.accel_name);
     const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);
     const AccelStats stats = accel->stats();
+    status.clear();
     if (options.is_json) {
         nlohmann::ordered_json json;
         json["scene"] = describe_scene(options.scene_path);
@@ -69,6 +93,9 @@ void run_stats(const StatsOptions& options) {
     } else {
         print_stats_text(std::cout, describe_scene(options.scene_path), options.accel_name, stats);
         std::cout << std::left << std::setw(16) << "peak_rss_bytes" << peak_rss_bytes() << "\n";
+        if (!stats.sah)
+            std::cout << "(no sah, nodes or leaves: " << options.accel_name
+                      << " is Embree's own BVH, which Embree does not let others inspect)\n";
     }
 }
 

@@ -2,14 +2,20 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "accel_factory.h"
 #include "commands.h"
+#include "option_checks.h"
 #include "output_file.h"
+#include "rebraid/core/error.h"
 #include "rebraid/io/ray_file.h"
 #include "scene_source.h"
 
@@ -35,14 +41,29 @@ public:
     }
 };
 
+/// Whether `path` ends in a scene file's extension (.gltf or .glb, any case).
+bool has_scene_extension(const std::string& path) {
+    std::string extension = std::filesystem::path(path).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return extension == ".gltf" || extension == ".glb";
+}
+
 void run_trace(const TraceOptions& options) {
     // SCENE is optional but comes first, so the positionals are taken as one list and the
     // last one is always the ray file.
     const std::string rays_path = options.paths.back();
     const std::string scene_path = options.paths.size() == 2 ? options.paths.front() : "";
+    if (options.paths.size() == 1 && has_scene_extension(rays_path))
+        throw Error("trace needs a ray file: 'rebraid trace [SCENE] RAYS', and '" + rays_path +
+                    "' is a scene; write rays with 'rebraid rays " + rays_path +
+                    " --count N -o RAYS'");
 
+    // Everything that can fail is checked before the (slower) build.
     find_accel(options.accel_name);
-    // Read the rays before the (slower) build so a bad ray file fails fast.
+    check_build_options_used(std::span(&options.accel_name, 1), options.accel_options);
+    check_scene_file(scene_path);
+    check_input_file(rays_path, "ray file");
+    check_output_file(options.hits_path, "hit file");
     const std::vector<Ray> rays = read_ray_file(rays_path);
     const Scene scene =
         options.time ? load_scene_at_time(scene_path, *options.time) : load_scene(scene_path);
@@ -58,6 +79,12 @@ void run_trace(const TraceOptions& options) {
                       });
 
     write_output(options.hits_path, [&](std::ostream& out) { write_hits(out, hits); });
+    const auto hit_count =
+        std::count_if(hits.begin(), hits.end(), [](const Hit& hit) { return hit.is_hit(); });
+    print_summary_on_terminal(
+        "traced " + std::to_string(rays.size()) + " rays through " + options.accel_name + " in " +
+        describe_scene(scene_path) + ": " + std::to_string(hit_count) + " hits" +
+        (options.hits_path.empty() ? std::string() : ", written to " + options.hits_path));
 }
 
 }  // namespace
@@ -84,6 +111,7 @@ void add_trace_command(CLI::App& app, CommonOptions& common, CommandAction& acti
     command
         ->add_option("--time", options->time,
                      "pose the scene at T seconds of its glTF animation (animation 0) first")
+        ->check(finite_number())
         ->type_name("T");
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_trace(*options); }; });

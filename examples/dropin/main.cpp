@@ -12,9 +12,10 @@
 //
 // and in CMake, target_link_libraries(app PRIVATE rebraid::embree_dropin) instead of embree.
 //
-// Usage: dropin_example [--mode embree|rebraid|user-geometry] [-o image.ppm]
+// Usage (also --help): dropin_example [--mode embree|rebraid|user-geometry] [-o image.ppm]
 //        dropin_example --check   (all three modes must agree; exit code 1 if not)
 //        dropin_example --bench   (Mrays/s of each mode, instanced and flattened scene)
+// A bad command line exits with 2.
 
 #include <embree3/rtcore.h>
 #include <rebraid/embree.h>  // rebraid: the drop-in
@@ -296,6 +297,18 @@ int render(RTCDevice device, Mode mode, const std::string& path) {
 
 }  // namespace
 
+constexpr const char* kUsage =
+    "usage: dropin_example [--mode embree|rebraid|user-geometry] [--grid N] [-o image.ppm]\n"
+    "       dropin_example --check   all three modes must agree (exit code 1 if not)\n"
+    "       dropin_example --bench   Mrays/s of each mode, instanced and flattened scene\n"
+    "--grid N: N x N instances (default 24); -o: the image of --mode (default dropin.ppm)\n";
+
+/// Prints `message` and the usage on stderr; the exit code of a bad command line.
+int usage_error(const std::string& message) {
+    std::fprintf(stderr, "dropin_example: %s\n%s", message.c_str(), kUsage);
+    return 2;
+}
+
 int main(int argc, char** argv) {
     try {
         Mode mode = Mode::rebraid;
@@ -304,23 +317,38 @@ int main(int argc, char** argv) {
         int grid = 24;
         for (int i = 1; i < argc; ++i) {
             const std::string arg = argv[i];
-            if (arg == "--check")
+            const bool takes_value = arg == "--grid" || arg == "-o" || arg == "--mode";
+            if (takes_value && i + 1 >= argc) return usage_error(arg + " needs a value");
+            if (arg == "-h" || arg == "--help") {
+                std::fputs(kUsage, stdout);
+                return 0;
+            } else if (arg == "--check") {
                 is_check = true;
-            else if (arg == "--bench")
+            } else if (arg == "--bench") {
                 is_bench = true;
-            else if (arg == "--grid" && i + 1 < argc)
-                grid = std::max(1, std::atoi(argv[++i]));
-            else if (arg == "-o" && i + 1 < argc)
+            } else if (arg == "--grid") {
+                const std::string value = argv[++i];
+                char* end = nullptr;
+                const long parsed = std::strtol(value.c_str(), &end, 10);
+                if (value.empty() || *end != '\0' || parsed < 1 || parsed > 1000)
+                    return usage_error("--grid " + value +
+                                       ": expected a whole number from 1 to 1000");
+                grid = static_cast<int>(parsed);
+            } else if (arg == "-o") {
                 output = argv[++i];
-            else if (arg == "--mode" && i + 1 < argc) {
+            } else if (arg == "--mode") {
                 const std::string name = argv[++i];
-                mode = name == "embree"          ? Mode::embree
-                       : name == "user-geometry" ? Mode::user_geometry
-                                                 : Mode::rebraid;
+                if (name == "embree")
+                    mode = Mode::embree;
+                else if (name == "rebraid")
+                    mode = Mode::rebraid;
+                else if (name == "user-geometry")
+                    mode = Mode::user_geometry;
+                else
+                    return usage_error("--mode " + name +
+                                       ": expected embree, rebraid or user-geometry");
             } else {
-                std::fprintf(stderr, "unknown argument %s (see the comment atop main.cpp)\n",
-                             arg.c_str());
-                return 2;
+                return usage_error("unknown argument " + arg);
             }
         }
         RTCDevice device = rtcNewDevice(nullptr);

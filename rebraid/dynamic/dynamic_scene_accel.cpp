@@ -27,7 +27,7 @@ DynamicTop parse_dynamic_top(std::string_view name) {
     for (DynamicTop top :
          {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
         if (name == dynamic_top_name(top)) return top;
-    throw Error("parse_dynamic_top: unknown top level '" + std::string(name) +
+    throw Error("unknown top level '" + std::string(name) +
                 "' (valid: twolevel, rebraid, rebraid-incremental)");
 }
 

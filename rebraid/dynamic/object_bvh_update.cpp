@@ -46,8 +46,7 @@ UpdateStrategy parse_update_strategy(std::string_view name) {
         if (known == name) return value;
         valid += (valid.empty() ? "" : ", ") + std::string(known);
     }
-    throw Error("parse_update_strategy: unknown update strategy '" + std::string(name) +
-                "' (valid: " + valid + ")");
+    throw Error("unknown update strategy '" + std::string(name) + "' (valid: " + valid + ")");
 }
 
 void ObjectBvhUpdateSettings::validate() const {

@@ -423,8 +423,7 @@ SceneKind parse_scene_kind(std::string_view name) {
         if (scene_kind_name(kind) == name) return kind;
         valid += (valid.empty() ? "" : ", ") + std::string(scene_kind_name(kind));
     }
-    throw Error("parse_scene_kind: unknown scene kind '" + std::string(name) +
-                "' (valid kinds: " + valid + ")");
+    throw Error("unknown scene kind '" + std::string(name) + "'; valid kinds: " + valid);
 }
 
 std::uint32_t default_instance_count(SceneKind kind) {
@@ -447,8 +446,8 @@ Scene generate_scene(SceneKind kind, const SceneGeneratorSettings& settings) {
     const std::uint32_t count =
         settings.instance_count == 0 ? default_instance_count(kind) : settings.instance_count;
     if (count > kMaxGeneratedInstances)
-        throw Error("generate_scene: " + std::string(scene_kind_name(kind)) + ": instance_count " +
-                    std::to_string(count) + " exceeds the limit of " +
+        throw Error("generated " + std::string(scene_kind_name(kind)) + ": " +
+                    std::to_string(count) + " instances exceed the limit of " +
                     std::to_string(kMaxGeneratedInstances));
     const bool world_space = settings.placement == ObjectPlacement::world_space ||
                              (settings.placement == ObjectPlacement::kind_default &&
@@ -460,7 +459,7 @@ Scene generate_scene(SceneKind kind, const SceneGeneratorSettings& settings) {
         kind == SceneKind::kPowerplant ? kPowerplantPiecesPerObject : 1;
     const std::uint64_t piece_count = std::uint64_t(count) * pieces_per_object;
     if (piece_count > kMaxGeneratedInstances)
-        throw Error("generate_scene: " + std::string(scene_kind_name(kind)) + ": " +
+        throw Error("generated " + std::string(scene_kind_name(kind)) + ": " +
                     std::to_string(count) + " objects of " + std::to_string(pieces_per_object) +
                     " pieces exceed the limit of " + std::to_string(kMaxGeneratedInstances) +
                     " pieces");

@@ -21,7 +21,7 @@ bool gltf_elements_fit(std::uint64_t offset, std::uint64_t count, std::uint64_t 
 
 /// Resolves accessor `id` of `model` to its bytes after checking that it and its bufferView lie
 /// inside their buffer, so reading `count` elements is safe whatever the file declares.
-/// Throws rebraid::Error starting with `error_prefix` (e.g. "load_gltf_scene: 'a.glb': ") and
+/// Throws rebraid::Error starting with `error_prefix` (e.g. "scene file 'a.glb': ") and
 /// naming `role` (the use, e.g. "POSITION of mesh 2 ('x') primitive 0") for a missing accessor,
 /// a sparse accessor (not supported), a bad bufferView or buffer reference, or a range that
 /// runs past its buffer.

@@ -86,8 +86,9 @@ public:
     AnimatorBuilder(const GltfLoadResult& loaded, const GltfAnimationSettings& settings)
         : loaded_(loaded), model_(*loaded.model) {
         data_.settings = settings;
-        data_.error_prefix = "GltfAnimator: " +
-                             (settings.file_label.empty() ? "" : "'" + settings.file_label + "': ");
+        data_.error_prefix = "glTF animation" + (settings.file_label.empty()
+                                                     ? std::string(": ")
+                                                     : " of '" + settings.file_label + "': ");
     }
 
     std::unique_ptr<const GltfAnimator::Data> build() {

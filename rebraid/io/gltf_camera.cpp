@@ -97,7 +97,7 @@ public:
 
 private:
     std::string camera_label(int id) const {
-        return "read_gltf_cameras: camera " + std::to_string(id) + " ('" +
+        return "glTF camera " + std::to_string(id) + " ('" +
                model_.cameras[static_cast<std::size_t>(id)].name + "')";
     }
 
@@ -127,7 +127,7 @@ private:
 
     void add_camera(int camera_id, int node_id, const NodeTransform& to_world) {
         if (static_cast<std::size_t>(camera_id) >= model_.cameras.size())
-            throw Error("read_gltf_cameras: node " + std::to_string(node_id) +
+            throw Error("glTF cameras: node " + std::to_string(node_id) +
                         " references missing camera " + std::to_string(camera_id) + ", file has " +
                         std::to_string(model_.cameras.size()));
         for (const GltfCamera& known : cameras_)

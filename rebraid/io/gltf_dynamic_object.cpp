@@ -43,7 +43,7 @@ std::unique_ptr<AnimatedObject> load_gltf_animated_object(const std::string& pat
     auto object = std::make_unique<GltfAnimatedObject>(std::move(loaded), labelled);
     if (!(object->duration() > 0.0f) ||
         (object->deformed_meshes().empty() && object->moving_instances().empty()))
-        throw Error("load_gltf_animated_object: nothing in '" + path + "' is animated");
+        throw Error("nothing in '" + path + "' is animated");
     return object;
 }
 

@@ -79,8 +79,7 @@ std::vector<GltfMaterial> read_gltf_materials(const GltfLoadResult& loaded) {
     materials.reserve(model.materials.size());
     for (std::size_t m = 0; m < model.materials.size(); ++m) {
         const tinygltf::Material& source = model.materials[m];
-        const std::string label =
-            "read_gltf_materials: material " + std::to_string(m) + " ('" + source.name + "')";
+        const std::string label = "glTF material " + std::to_string(m) + " ('" + source.name + "')";
         GltfMaterial material;
         material.name = source.name;
         material.is_double_sided = source.doubleSided;
@@ -132,8 +131,8 @@ std::vector<GltfImageSource> read_gltf_image_sources(const GltfLoadResult& loade
         source.name = image.name;
         source.mime_type = image.mimeType;
         if (image.bufferView >= 0) {
-            const std::string label = "read_gltf_image_sources: '" + gltf_path + "': image " +
-                                      std::to_string(i) + " ('" + image.name + "')";
+            const std::string label = "scene file '" + gltf_path + "': image " + std::to_string(i) +
+                                      " ('" + image.name + "')";
             if (static_cast<std::size_t>(image.bufferView) >= model.bufferViews.size())
                 throw Error(label + " references bufferView " + std::to_string(image.bufferView) +
                             ", file has " + std::to_string(model.bufferViews.size()));
@@ -180,7 +179,7 @@ std::vector<std::vector<std::array<float, 2>>> read_gltf_base_colour_uvs(
 
             const std::string role = attribute + " of mesh " + std::to_string(m) + " primitive " +
                                      std::to_string(range.gltf_primitive);
-            const std::string prefix = "read_gltf_base_colour_uvs: ";
+            const std::string prefix = "glTF base colour texture coordinates: ";
             const GltfElementRange elements =
                 resolve_gltf_accessor(model, found->second, role, prefix);
             const tinygltf::Accessor& accessor =

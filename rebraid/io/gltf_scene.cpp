@@ -114,7 +114,7 @@ public:
     }
 
 private:
-    std::string error_prefix() const { return "load_gltf_scene: '" + path_ + "': "; }
+    std::string error_prefix() const { return "scene file '" + path_ + "': "; }
     [[noreturn]] void fail(const std::string& what) const { throw Error(error_prefix() + what); }
 
     std::string mesh_label(std::size_t m) const {

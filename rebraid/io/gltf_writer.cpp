@@ -39,7 +39,7 @@ public:
 
 private:
     [[noreturn]] void fail(const std::string& what) const {
-        throw Error("write_gltf_scene: '" + path_ + "': " + what);
+        throw Error("cannot write scene file '" + path_ + "': " + what);
     }
 
     std::string lower_case_extension() const {

@@ -1,8 +1,11 @@
 #include "rebraid/io/ray_file.h"
 
 #include <array>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <istream>
 #include <limits>
@@ -26,7 +29,7 @@ bool is_space(char c) {
 /// Builds the message prefix every bad-line error shares.
 std::string line_error(const std::string& source_name, std::size_t line_number,
                        const std::string& what) {
-    return "read_rays: " + source_name + ": line " + std::to_string(line_number) + ": " + what;
+    return "ray file '" + source_name + "': line " + std::to_string(line_number) + ": " + what;
 }
 
 /// Parses one whole field as a float. Returns false when the text is not a float or is
@@ -137,14 +140,20 @@ std::vector<Ray> read_rays(std::istream& in, const std::string& source_name) {
         rays.push_back(parse_ray_line(line, source_name, line_number));
     }
     if (in.bad())
-        throw Error("read_rays: " + source_name + ": read failed after line " +
-                    std::to_string(line_number));
+        throw Error("ray file '" + source_name + "': reading failed after line " +
+                    std::to_string(line_number) + ": " + std::strerror(errno));
     return rays;
 }
 
 std::vector<Ray> read_ray_file(const std::string& path) {
+    std::error_code error;
+    if (std::filesystem::is_directory(path, error))
+        throw Error("ray file '" + path + "' is a directory, not a file");
+    errno = 0;
     std::ifstream file(path);
-    if (!file) throw Error("read_ray_file: cannot open ray file '" + path + "'");
+    if (!file)
+        throw Error("cannot open ray file '" + path +
+                    "': " + (errno != 0 ? std::strerror(errno) : "unknown reason"));
     return read_rays(file, path);
 }
 

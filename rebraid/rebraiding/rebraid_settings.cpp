@@ -1,6 +1,7 @@
 #include "rebraid/rebraiding/rebraid_settings.h"
 
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "rebraid/bvh/wide_node.h"
@@ -10,9 +11,11 @@ namespace rebraid {
 
 void RebraidSettings::validate() const {
     auto check = [](bool ok, const char* field, float value, const char* rule) {
-        if (!ok)
-            throw Error(std::string("RebraidSettings: ") + field + " " + std::to_string(value) +
-                        " " + rule);
+        if (!ok) {
+            std::ostringstream text;  // "-1", not "-1.000000"
+            text << "re-braiding setting " << field << " " << value << " " << rule;
+            throw Error(text.str());
+        }
     };
     check(std::isfinite(open_threshold) && open_threshold >= 0.0f, "open_threshold", open_threshold,
           "must be finite and >= 0");
@@ -21,7 +24,7 @@ void RebraidSettings::validate() const {
     check(std::isfinite(primitives_per_bref) && primitives_per_bref >= 1.0f, "primitives_per_bref",
           primitives_per_bref, "must be finite and >= 1");
     if (max_budget > NodeRef::kMaxFirst)
-        throw Error("RebraidSettings: max_budget " + std::to_string(max_budget) +
+        throw Error("re-braiding setting max_budget " + std::to_string(max_budget) +
                     " must be at most " + std::to_string(NodeRef::kMaxFirst));
     check(std::isfinite(small_overlap_fraction) && small_overlap_fraction >= 0.0f,
           "small_overlap_fraction", small_overlap_fraction, "must be finite and >= 0");
@@ -30,17 +33,17 @@ void RebraidSettings::validate() const {
     check(std::isfinite(overlap_threshold) && overlap_threshold >= 0.0f, "overlap_threshold",
           overlap_threshold, "must be finite and >= 0");
     if (budget_doublings > 16)
-        throw Error("RebraidSettings: budget_doublings " + std::to_string(budget_doublings) +
+        throw Error("re-braiding setting budget_doublings " + std::to_string(budget_doublings) +
                     " must be at most 16");
     check(std::isfinite(budget_search_min_gain) && budget_search_min_gain >= 0.0f &&
               budget_search_min_gain < 1.0f,
           "budget_search_min_gain", budget_search_min_gain, "must be finite and in [0, 1)");
     if (estimate_levels > 8)
-        throw Error("RebraidSettings: estimate_levels " + std::to_string(estimate_levels) +
+        throw Error("re-braiding setting estimate_levels " + std::to_string(estimate_levels) +
                     " must be at most 8");
     if (opening_rule != OpeningRule::extent && opening_rule != OpeningRule::sah &&
         opening_rule != OpeningRule::overlap)
-        throw Error("RebraidSettings: opening_rule " + std::to_string(int(opening_rule)) +
+        throw Error("re-braiding setting opening_rule " + std::to_string(int(opening_rule)) +
                     " is not an OpeningRule");
     build.validate();
 }

@@ -72,16 +72,16 @@ Ray Camera::ray_through(float pixel_x, float pixel_y, int width, int height) con
 Camera make_look_at_camera(Vec3f look_from, Vec3f look_at, Vec3f world_up, float fov_y_degrees) {
     const Vec3f view = look_at - look_from;
     if (!(length(view) > 0.0f))
-        throw Error("make_look_at_camera: look-from and look-at are the same point");
+        throw Error("the camera's look-from and look-at points are the same point");
     if (!(fov_y_degrees > 0.0f && fov_y_degrees < 180.0f))
-        throw Error("make_look_at_camera: field of view " + std::to_string(fov_y_degrees) +
+        throw Error("camera field of view " + std::to_string(fov_y_degrees) +
                     " degrees is outside (0, 180)");
     Camera camera;
     camera.position = look_from;
     camera.forward = normalize(view);
     const Vec3f right = cross(camera.forward, world_up);
     if (!(length(right) > 1e-6f))
-        throw Error("make_look_at_camera: view direction is parallel to the up vector");
+        throw Error("the camera's view direction is parallel to its up vector");
     camera.right = normalize(right);
     camera.up = cross(camera.right, camera.forward);
     camera.tan_half_fov_y = std::tan(radians(fov_y_degrees) * 0.5f);
@@ -152,7 +152,7 @@ Camera frame_scene(const Scene& scene, float aspect, const CameraFraming& framin
                                (corner & 2) ? box.max.y : box.min.y,
                                (corner & 4) ? box.max.z : box.min.z});
     }
-    if (corners.empty()) throw Error("frame_scene: the scene has no triangles to frame");
+    if (corners.empty()) throw Error("the scene has no triangles for a camera to frame");
     return frame_points(corners, aspect, framing);
 }
 

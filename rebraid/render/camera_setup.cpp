@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "rebraid/core/error.h"
 
@@ -85,7 +86,9 @@ CameraChoice choose_camera(const Scene& scene, std::span<const GltfCamera> gltf_
         choice.camera.ortho_half_height = 0.0f;
         choice.camera.tan_half_fov_y =
             std::tan(*request.fov_y_degrees * std::numbers::pi_v<float> / 360.0f);
-        choice.description += ", --fov " + std::to_string(*request.fov_y_degrees);
+        std::ostringstream fov_text;  // "--fov 20", not "--fov 20.000000"
+        fov_text << *request.fov_y_degrees;
+        choice.description += ", --fov " + fov_text.str();
     }
     return choice;
 }

@@ -99,6 +99,12 @@ void draw_legend(Image& image, HeatMetric metric, double scale_max, bool is_clip
     draw_text(image, box.x + pad + bar_width - text_width(high, s), y, high, s, white);
 }
 
+/// Whether the panel's structure counted its work: Embree's traversal counts nothing, and
+/// every ray of a counting structure visits at least its root.
+bool has_counts(const HeatmapPanel& panel) {
+    return panel.ray_count == 0 || panel.totals.nodes_visited + panel.totals.triangles_tested > 0;
+}
+
 }  // namespace
 
 std::string_view heat_metric_name(HeatMetric metric) {
@@ -212,9 +218,12 @@ Image draw_heatmaps(std::span<const HeatmapPanel> panels, const HeatmapSettings&
             title += "  " + format("%.1f", panel.mrays_per_second) + " Mrays/s";
         const PixelRect title_box = draw_label(image, x, 4 * s, title, s);
         const std::string work =
-            format("%.1f", per_ray(panel.totals.nodes_visited, panel.ray_count)) + " nodes  " +
-            format("%.1f", per_ray(panel.totals.triangles_tested, panel.ray_count)) +
-            " tris per ray";
+            !has_counts(panel)
+                ? std::string("work not counted")
+                : format("%.1f", per_ray(panel.totals.nodes_visited, panel.ray_count)) +
+                      " nodes  " +
+                      format("%.1f", per_ray(panel.totals.triangles_tested, panel.ray_count)) +
+                      " tris per ray";
         draw_label(image, x, title_box.y + title_box.height + s, work, s);
     }
     draw_legend(image, settings.metric, scale_max, is_clipped, s);
@@ -222,6 +231,14 @@ Image draw_heatmaps(std::span<const HeatmapPanel> panels, const HeatmapSettings&
 }
 
 std::string describe_heatmap_totals(const HeatmapPanel& panel) {
+    if (!has_counts(panel)) {
+        std::string text = panel.label +
+                           ": work not counted (the structure's traversal, such as "
+                           "Embree's, does not report it)";
+        if (panel.mrays_per_second > 0.0)
+            text += ", " + format("%.2f", panel.mrays_per_second) + " Mrays/s";
+        return text;
+    }
     std::string text =
         panel.label + ": " + std::to_string(panel.totals.nodes_visited) + " nodes visited, " +
         std::to_string(panel.totals.triangles_tested) + " triangles tested by " +

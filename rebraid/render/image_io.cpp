@@ -47,13 +47,16 @@ void Image::set_pixel(int x, int y, Vec3f colour) {
 }
 
 void check_image_format(const std::string& path) {
-    if (!OIIO::ImageOutput::create(path))
-        throw Error("check_image_format: no image writer for '" + path + "': " + OIIO::geterror());
+    if (!OIIO::ImageOutput::create(path)) {
+        OIIO::geterror();  // clears OpenImageIO's longer message, which says the same
+        throw Error("no image writer for '" + path +
+                    "': name the image .png, or .exr for linear half-float");
+    }
 }
 
 void write_image(const std::string& path, const Image& image) {
     auto out = OIIO::ImageOutput::create(path);
-    if (!out) throw Error("write_image: cannot write '" + path + "': " + OIIO::geterror());
+    if (!out) throw Error("cannot write image '" + path + "': " + OIIO::geterror());
     const bool is_linear_format = is_exr_path(path);
     OIIO::ImageSpec spec(image.width, image.height, 3,
                          is_linear_format ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8);
@@ -65,7 +68,7 @@ void write_image(const std::string& path, const Image& image) {
     }
     if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) ||
         !out->close())
-        throw Error("write_image: cannot write '" + path + "': " + out->geterror());
+        throw Error("cannot write image '" + path + "': " + out->geterror());
 }
 
 }  // namespace rebraid::viewer

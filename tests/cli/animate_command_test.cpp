@@ -164,7 +164,8 @@ TEST(AnimateCommand, BadOptionsExitWithOneAndAMessage) {
         {{"--top", "flat"}, "flat"},
         {{"--dynamic", (dir / "missing.glb").string()}, "missing.glb"},
         {{"--static", (dir / "nothing.glb").string()}, "nothing.glb"},
-        {{"--size", "2"}, "size_fraction"},
+        {{"--size", "2"}, "--size: 2 is out of range: it must be from 0 to 1"},
+        {{"--size", "0"}, "--size must be more than 0"},
         {{"--static-builder", "quick"}, "quick"},
     };
     const std::string static_scene = small_static_scene_file("bad");

@@ -467,8 +467,10 @@ TEST(BadInputCli, ReversedSegmentIsAMissInTheHitFile) {
 
 TEST(BadInputCli, OutOfRangeSettingsExitWithOne) {
     const std::string scene = tiny_scene();
-    expect_clean_failure({"stats", scene, "--budget-factor", "1e9"}, {"budget_factor"});
-    expect_clean_failure({"stats", scene, "--budget-factor", "nan"}, {"budget_factor"});
+    expect_clean_failure({"stats", scene, "--budget-factor", "1e9"},
+                         {"--budget-factor: 1e9 is out of range: it must be from 0 to 1e+06"});
+    expect_clean_failure({"stats", scene, "--budget-factor", "nan"},
+                         {"--budget-factor: 'nan' is not a number"});
     // Ranges the command line itself checks are CLI11 parse errors: exit code 1 too, and a
     // message naming the option.
     const CommandResult negative = run_rebraid({"stats", scene, "--open-threshold", "-1"});

@@ -58,6 +58,34 @@ inline std::filesystem::path test_scratch_dir(std::string_view group, bool fresh
     return dir;
 }
 
+/// The shell command line that runs the rebraid binary with `arguments`, each quoted.
+inline std::string rebraid_command_line(std::span<const std::string> arguments) {
+    std::string command = shell_quote(REBRAID_CLI);
+    // Appended piecewise: GCC 12 warns (falsely, -Wrestrict) on "literal" + std::string&&.
+    for (const std::string& argument : arguments) {
+        command += ' ';
+        command += shell_quote(argument);
+    }
+    return command;
+}
+
+/// Runs the shell command line `command`, its output streams going to stdout.txt and
+/// stderr.txt in `dir`.
+inline CommandResult run_shell_in(const std::filesystem::path& dir, const std::string& command) {
+    const std::filesystem::path out_path = dir / "stdout.txt", err_path = dir / "stderr.txt";
+    std::string redirected = command;
+    redirected += " >";
+    redirected += shell_quote(out_path.string());
+    redirected += " 2>";
+    redirected += shell_quote(err_path.string());
+    const int status = std::system(redirected.c_str());
+    CommandResult result;
+    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+    result.out = read_text_file(out_path);
+    result.err = read_text_file(err_path);
+    return result;
+}
+
 /// Runs the rebraid binary with `arguments`, its output streams going to stdout.txt and
 /// stderr.txt in `dir`. With a timeout, a hang ends as a failure instead of blocking the suite.
 inline CommandResult run_rebraid_in(const std::filesystem::path& dir,
@@ -65,23 +93,8 @@ inline CommandResult run_rebraid_in(const std::filesystem::path& dir,
                                     int timeout_seconds = 0) {
     std::string command;
     if (timeout_seconds > 0) command = "timeout " + std::to_string(timeout_seconds) + " ";
-    command += shell_quote(REBRAID_CLI);
-    // Appended piecewise: GCC 12 warns (falsely, -Wrestrict) on "literal" + std::string&&.
-    for (const std::string& argument : arguments) {
-        command += ' ';
-        command += shell_quote(argument);
-    }
-    const std::filesystem::path out_path = dir / "stdout.txt", err_path = dir / "stderr.txt";
-    command += " >";
-    command += shell_quote(out_path.string());
-    command += " 2>";
-    command += shell_quote(err_path.string());
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    result.out = read_text_file(out_path);
-    result.err = read_text_file(err_path);
-    return result;
+    command += rebraid_command_line(arguments);
+    return run_shell_in(dir, command);
 }
 
 inline CommandResult run_rebraid_in(const std::filesystem::path& dir,
