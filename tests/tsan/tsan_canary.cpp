@@ -21,8 +21,8 @@
 // ThreadSanitizer does not count as synchronisation: the accesses are unordered, and both
 // threads take part, so the report does not depend on the timing.
 //
-// In a build without ThreadSanitizer the program runs nothing (tests/CMakeLists.txt only
-// registers it under the `tsan` preset).
+// In a build without ThreadSanitizer the program runs nothing; tests/CMakeLists.txt only
+// builds and registers it when the flags contain -fsanitize=thread (the `tsan` preset).
 
 #include <cstdio>
 #include <cstring>
