@@ -13,8 +13,10 @@
 # tsan:    the `tsan` preset against a ThreadSanitizer build of Debian's oneTBB (built once
 #          into <build>/tbb from `apt-get source onetbb`, which needs a deb-src line in the apt
 #          sources), the executables labelled `tsan` (target `tsan_tests`: every one whose code
-#          runs on several threads) and their tests except the labels `slow` and `memory`,
-#          with the tests made once per shared scene on the four smallest scenes only.
+#          runs on several threads, and the canary tsan_canary) and their tests except the
+#          labels `slow` and `memory`, with the tests made once per shared scene on the four
+#          smallest scenes only. Not part of scripts/run-tests.sh, so not of CI (too long for
+#          it): run it on a schedule and before a release.
 # docs/testing.md explains the choices, the suppressions and the times.
 # The build folder is build-asan/ or build-tsan/ ($REBRAID_SANITIZER_BUILD overrides it).
 # Installs dependencies first, like scripts/run-tests.sh. Exits non-zero on any failure or

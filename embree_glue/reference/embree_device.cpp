@@ -14,8 +14,8 @@ struct EmbreeDevice::Monitor {
     RTCError first_code = RTC_ERROR_NONE;
     std::string first_message;
     std::size_t later_error_count = 0;  ///< errors reported after the first, before a check
-    // A sum does not depend on the order in which Embree's build threads report, so a relaxed
-    // atomic keeps the count deterministic.
+    // A sum does not depend on the order in which Embree's build threads report, so an atomic
+    // add keeps the count deterministic. The adds release and release() acquires: see there.
     std::atomic<std::int64_t> allocated_bytes{0};
 };
 
@@ -75,6 +75,13 @@ void EmbreeDevice::release() noexcept {
     rtcSetDeviceMemoryMonitorFunction(device_, nullptr, nullptr);
     rtcReleaseDevice(device_);
     device_ = nullptr;
+    // Embree calls on_memory from its build threads and joins them before the build call
+    // returns, so every call has happened before this point; but the join is in Embree's code,
+    // which ThreadSanitizer does not see. Reading the counter with acquire after the callbacks'
+    // release adds orders them before the Monitor's deletion in the project's own code. A
+    // callback that Embree made after this point would still race with the deletion, and
+    // ThreadSanitizer reports it (tests/tsan/tsan_canary.cpp, case callback_destroy).
+    (void)monitor_->allocated_bytes.load(std::memory_order_acquire);
 }
 
 void EmbreeDevice::on_error(void* user, RTCError code, const char* message) noexcept {
@@ -96,7 +103,8 @@ void EmbreeDevice::on_error(void* user, RTCError code, const char* message) noex
 
 bool EmbreeDevice::on_memory(void* user, ssize_t bytes, bool /*post*/) noexcept {
     // Embree passes positive byte counts before allocations and negative ones after frees.
-    static_cast<Monitor*>(user)->allocated_bytes.fetch_add(bytes, std::memory_order_relaxed);
+    // Release: the add happens before the Monitor's deletion (release()).
+    static_cast<Monitor*>(user)->allocated_bytes.fetch_add(bytes, std::memory_order_release);
     return true;  // never veto an allocation
 }
 
