@@ -124,18 +124,8 @@ BBox3f SupportTable::world_bounds(const AffineTransform& to_world, const ObjectB
         box.min[axis] = center - support(-row);
         box.max[axis] = center + support(row);
     }
-    // Rounding: the weights, the sums, the projections and the mapped centre round at the
-    // magnitude of their terms, which can exceed that of the result. Pad by 32 ulps of the
-    // largest term.
-    const float matrix_magnitude =
-        std::max({max_abs(to_world.col_x), max_abs(to_world.col_y), max_abs(to_world.col_z)});
-    const float magnitude =
-        std::max({3.0f * matrix_magnitude * object_magnitude_, max_abs(to_world.translation),
-                  max_abs(box.min), max_abs(box.max)});
-    const float pad = magnitude * 0x1p-18f;
-    box.min = box.min - Vec3f{pad, pad, pad};
-    box.max = box.max + Vec3f{pad, pad, pad};
-    return box;
+    // The weights, the sums, the projections and the mapped centre round: 32 ulps.
+    return widen_for_mapping_rounding(box, to_world, object_magnitude_, 32.0f);
 }
 
 }  // namespace rebraid

@@ -99,16 +99,20 @@ BBox3f vertex_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& nod
         box.min[axis] = -lowest_negated.value() + to_world.translation[axis];
         box.max[axis] = highest.value() + to_world.translation[axis];
     }
-    // Rounding: the projections and the sums above round at the magnitude of the terms, which
-    // can exceed that of the result (a large object coordinate cancelled by the translation).
-    // Pad by 8 ulps of the largest term, like transformed leaf bounds (bref_bounds.cpp).
-    const float object_magnitude = std::max(max_abs(node_box.min), max_abs(node_box.max));
+    // The projections and the sums above round: 8 ulps, like transformed leaf bounds
+    // (bref_bounds.cpp).
+    return widen_for_mapping_rounding(box, to_world,
+                                      std::max(max_abs(node_box.min), max_abs(node_box.max)), 8.0f);
+}
+
+BBox3f widen_for_mapping_rounding(BBox3f box, const AffineTransform& to_world,
+                                  float object_magnitude, float ulps) {
     const float matrix_magnitude =
         std::max({max_abs(to_world.col_x), max_abs(to_world.col_y), max_abs(to_world.col_z)});
     const float magnitude =
         std::max({3.0f * matrix_magnitude * object_magnitude, max_abs(to_world.translation),
                   max_abs(box.min), max_abs(box.max)});
-    const float pad = magnitude * 0x1p-20f;
+    const float pad = magnitude * ulps * 0x1p-23f;
     box.min = box.min - Vec3f{pad, pad, pad};
     box.max = box.max + Vec3f{pad, pad, pad};
     return box;

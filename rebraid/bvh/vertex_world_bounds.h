@@ -23,6 +23,13 @@ namespace rebraid {
 BBox3f vertex_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
                            const AffineTransform& to_world, float tolerance = 0.01f);
 
+/// `box`, which holds points of an object (coordinates at most `object_magnitude` in absolute
+/// value) mapped by `to_world` in a rounded computation, widened by `ulps` float ulps of the
+/// largest term such a mapping sums: the terms' magnitude, not the result's, bounds the
+/// rounding (a large object coordinate may be cancelled by the translation).
+BBox3f widen_for_mapping_rounding(BBox3f box, const AffineTransform& to_world,
+                                  float object_magnitude, float ulps);
+
 /// One support value of that search: `value` is the largest `direction` · v over the vertices
 /// of the triangles under `node`, or a bound at most `slack` above it (never below it, up to
 /// the rounding of the projections); -infinity for an empty node. `vertex` is the vertex of

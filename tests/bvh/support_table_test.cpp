@@ -12,32 +12,11 @@
 #include "rebraid/bvh/object_support_tables.h"
 #include "rebraid/core/random.h"
 #include "rebraid/generators/mesh_generators.h"
+#include "support/placed_vertices.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
 namespace {
-
-/// The box of every vertex under `ref` as transform_point maps it, by a plain pass.
-BBox3f brute_force_bounds(const ObjectBvh& bvh, NodeRef ref, const AffineTransform& to_world) {
-    BBox3f box;
-    if (ref.is_leaf()) {
-        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i)
-            for (Vec3f v : {bvh.triangles[i].v0, bvh.triangles[i].v1, bvh.triangles[i].v2})
-                box.extend(to_world.transform_point(v));
-        return box;
-    }
-    const WideNode& node = bvh.nodes[ref.node_id()];
-    for (int c = 0; c < kBvhWidth && !node.children[c].is_empty(); ++c)
-        box.extend(brute_force_bounds(bvh, node.children[c], to_world));
-    return box;
-}
-
-float largest_gap(const BBox3f& outer, const BBox3f& inner) {
-    float gap = 0.0f;
-    for (int axis = 0; axis < 3; ++axis)
-        gap = std::max({gap, inner.min[axis] - outer.min[axis], outer.max[axis] - inner.max[axis]});
-    return gap;
-}
 
 struct NamedMesh {
     std::string name;
@@ -64,11 +43,11 @@ TEST(SupportTable, HoldsEveryPlacedVertexWithinOnePercent) {
             SCOPED_TRACE(named.name + ", trial " + std::to_string(trial));
             const AffineTransform to_world = test::random_transform(random, 50.0f, trial % 2 == 1);
             const BBox3f bounds = table.world_bounds(to_world, bvh, bvh.root);
-            const BBox3f reference = brute_force_bounds(bvh, bvh.root, to_world);
+            const BBox3f reference = test::placed_vertex_bounds(bvh, bvh.root, to_world);
             ASSERT_TRUE(bounds.contains(reference));
             // The node's transformed box bounds its extent along every row of the transform.
             const Vec3f extent = to_world.transform_bbox(bvh.bounds).extent();
-            EXPECT_LE(largest_gap(bounds, reference),
+            EXPECT_LE(test::largest_gap(bounds, reference),
                       0.01f * std::max({extent.x, extent.y, extent.z}) + 1e-4f);
         }
     }
@@ -87,7 +66,7 @@ TEST(SupportTable, HoldsEveryVertexFarFromTheOrigin) {
             const AffineTransform to_world = AffineTransform::translate({1e6f, -2e6f, 5e5f}) *
                                              test::random_transform(random, 10.0f, trial % 2 == 1);
             EXPECT_TRUE(table.world_bounds(to_world, bvh, bvh.root)
-                            .contains(brute_force_bounds(bvh, bvh.root, to_world)))
+                            .contains(test::placed_vertex_bounds(bvh, bvh.root, to_world)))
                 << "trial " << trial;
         }
     }
@@ -99,11 +78,12 @@ TEST(SupportTable, AxisAlignedPlacementGivesTheVertexBox) {
     const ObjectBvh bvh = build_object_bvh(make_torus_knot({}));
     const SupportTable table(bvh, bvh.root, bvh.bounds, 0.0f);
     const AffineTransform swap_and_scale{{0, 2, 0}, {0, 0, -3}, {0.5f, 0, 0}, {1, 2, 3}};
-    const BBox3f reference = brute_force_bounds(bvh, bvh.root, swap_and_scale);
+    const BBox3f reference = test::placed_vertex_bounds(bvh, bvh.root, swap_and_scale);
     const BBox3f bounds = table.world_bounds(swap_and_scale, bvh, bvh.root, 0.0f);
     ASSERT_TRUE(bounds.contains(reference));
     const Vec3f extent = reference.extent();
-    EXPECT_LE(largest_gap(bounds, reference), 1e-5f * std::max({extent.x, extent.y, extent.z}));
+    EXPECT_LE(test::largest_gap(bounds, reference),
+              1e-5f * std::max({extent.x, extent.y, extent.z}));
 }
 
 TEST(SupportTable, EmptyNodeGivesEmptyBox) {
@@ -135,7 +115,7 @@ TEST(ObjectSupportTables, CoverTheRootAndItsInnerChildren) {
         ++inner_children;
         ASSERT_NE(table, nullptr);
         EXPECT_TRUE(table->world_bounds(to_world, bvh, child)
-                        .contains(brute_force_bounds(bvh, child, to_world)));
+                        .contains(test::placed_vertex_bounds(bvh, child, to_world)));
         if (!bvh.nodes[child.node_id()].children[0].is_inner()) continue;
         EXPECT_EQ(tables.find(bvh.nodes[child.node_id()].children[0]), nullptr);
     }

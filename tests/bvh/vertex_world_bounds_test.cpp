@@ -12,6 +12,7 @@
 #include "rebraid/core/random.h"
 #include "rebraid/generators/mesh_generators.h"
 #include "rebraid/rebraiding/bref_bounds.h"
+#include "support/placed_vertices.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -34,28 +35,6 @@ std::vector<NodeWithBox> every_node(const ObjectBvh& bvh) {
     return nodes;
 }
 
-/// The box of every transformed vertex under `ref`, by a plain pass.
-BBox3f brute_force_bounds(const ObjectBvh& bvh, NodeRef ref, const AffineTransform& to_world) {
-    BBox3f box;
-    if (ref.is_leaf()) {
-        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i)
-            for (Vec3f v : {bvh.triangles[i].v0, bvh.triangles[i].v1, bvh.triangles[i].v2})
-                box.extend(to_world.transform_point(v));
-        return box;
-    }
-    const WideNode& node = bvh.nodes[ref.node_id()];
-    for (int c = 0; c < kBvhWidth && !node.children[c].is_empty(); ++c)
-        box.extend(brute_force_bounds(bvh, node.children[c], to_world));
-    return box;
-}
-
-float largest_gap(const BBox3f& outer, const BBox3f& inner) {
-    float gap = 0.0f;
-    for (int axis = 0; axis < 3; ++axis)
-        gap = std::max({gap, inner.min[axis] - outer.min[axis], outer.max[axis] - inner.max[axis]});
-    return gap;
-}
-
 /// Checks vertex_world_bounds at `tolerance` on every node of a tree mesh under rotated,
 /// scaled, mirrored and translated placements: it holds every transformed vertex and lies
 /// within the tolerance of the node's extent (plus rounding padding) of their box.
@@ -66,12 +45,12 @@ void check_every_node(float tolerance) {
         const AffineTransform to_world = test::random_transform(random, 50.0f, trial % 2 == 1);
         for (const NodeWithBox& node : every_node(bvh)) {
             const BBox3f bounds = vertex_world_bounds(bvh, node.ref, node.box, to_world, tolerance);
-            const BBox3f reference = brute_force_bounds(bvh, node.ref, to_world);
+            const BBox3f reference = test::placed_vertex_bounds(bvh, node.ref, to_world);
             ASSERT_TRUE(bounds.contains(reference)) << "trial " << trial;
             // The node's transformed box bounds its extent along every row of the transform.
             const Vec3f extent = to_world.transform_bbox(node.box).extent();
             const float allowed = tolerance * std::max({extent.x, extent.y, extent.z}) + 1e-4f;
-            EXPECT_LE(largest_gap(bounds, reference), allowed) << "trial " << trial;
+            EXPECT_LE(test::largest_gap(bounds, reference), allowed) << "trial " << trial;
         }
     }
 }
