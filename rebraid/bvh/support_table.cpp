@@ -52,7 +52,11 @@ SupportTable::SupportTable(const ObjectBvh& bvh, NodeRef node, const BBox3f& nod
                 const VertexSupport found =
                     vertex_support(bvh, node, d, tolerance * extent_along(node_box, d),
                                    has_previous ? &previous : nullptr);
-                previous = found.vertex;
+                if (found.value == -std::numeric_limits<float>::infinity()) {
+                    is_empty_ = true;  // no vertex under the node: nothing to bound
+                    return;
+                }
+                previous = found.vertex;  // a real vertex: a valid start for the next search
                 has_previous = true;
                 // Relative to the centre, in double, then widened by 8 ulps of the terms: the
                 // projections in vertex_support round at the object's magnitude.
