@@ -14,8 +14,9 @@ namespace rebraid {
 /// lookups instead, for meshes placed many times.
 ///
 /// The table holds, at the directions of a grid of kCells x kCells squares on each face of
-/// the cube [-1,1]^3 (each square cut into two triangles), the support of the vertices (their
-/// largest projection, relative to the object box's centre) and a vertex reaching it. A
+/// the cube [-1,1]^3 (each square cut into two triangles), an upper bound of the support of
+/// the vertices (their largest projection, relative to the object box's centre) and the
+/// vertex of largest projection its search met. A
 /// direction inside a grid triangle is a combination of the triangle's corners with
 /// non-negative weights, and a support function is convex and positively homogeneous, so the
 /// same combination of the corners' values bounds its support from above; the corners'
