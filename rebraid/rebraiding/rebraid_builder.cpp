@@ -179,15 +179,16 @@ private:
 };
 
 /// Per mesh, the ObjectSupportTables of its BVH where the settings ask for vertex bounds and
-/// the mesh has support_table_instances `instances` or more (others: no tables); empty when
-/// no mesh has.
-std::vector<ObjectSupportTables> object_support_tables(std::span<const ObjectBvh> object_bvhs,
-                                                       std::span<const std::uint32_t> instance_mesh,
+/// the mesh has support_table_instances `instances` of `scene` or more (others: no tables);
+/// empty when no mesh has. Made once per build_rebraid call: every build it makes (budget
+/// search, the unopened build of the guard) uses the same bounds rule.
+std::vector<ObjectSupportTables> object_support_tables(const Scene& scene,
+                                                       std::span<const ObjectBvh> object_bvhs,
                                                        std::span<const InstanceId> instances,
                                                        const RebraidSettings& settings) {
     if (settings.bounds_rule != BRefBoundsRule::transformed_vertices) return {};
     std::vector<std::uint32_t> uses(object_bvhs.size(), 0);
-    for (const InstanceId i : instances) ++uses[instance_mesh[i]];
+    for (const InstanceId i : instances) ++uses[scene.instances[i].mesh_id];
     std::vector<std::uint32_t> meshes;
     for (std::uint32_t mesh = 0; mesh < uses.size(); ++mesh)
         if (uses[mesh] >= settings.support_table_instances) meshes.push_back(mesh);
@@ -240,6 +241,7 @@ struct TrackedBuild {
 };
 
 TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                std::span<const ObjectSupportTables> support_tables,
                                 const RebraidSettings& settings,
                                 std::span<const InstanceId> instances, bool is_tracking_cost);
 
@@ -259,6 +261,7 @@ double top_level_own_cost(const TopLevelBvh& top) {
 /// at least budget_search_min_gain, and the cheapest build is returned. The budgets tried and
 /// the costs compared depend on the input only, so the choice is the same on any thread count.
 TrackedBuild search_larger_budgets(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                   std::span<const ObjectSupportTables> support_tables,
                                    const RebraidSettings& settings,
                                    std::span<const InstanceId> instances, TrackedBuild first) {
     TrackedBuild best = std::move(first);
@@ -269,7 +272,8 @@ TrackedBuild search_larger_budgets(const Scene& scene, std::span<const ObjectBvh
             larger.budget_factor *= 2.0f;
         else
             larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref * 0.5f);
-        TrackedBuild candidate = build_rebraid_once(scene, object_bvhs, larger, instances, true);
+        TrackedBuild candidate =
+            build_rebraid_once(scene, object_bvhs, support_tables, larger, instances, true);
         // The caps (every primitive a BRef, max_budget) stop the budget from growing.
         if (candidate.build.budget <= last_budget) break;
         last_budget = candidate.build.budget;
@@ -296,14 +300,24 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
 RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                            const RebraidSettings& settings, std::span<const InstanceId> instances) {
     settings.validate();
+    if (object_bvhs.size() != scene.meshes.size())
+        throw Error("build_rebraid: " + std::to_string(object_bvhs.size()) + " object BVHs for " +
+                    std::to_string(scene.meshes.size()) + " meshes");
+    for (const InstanceId i : instances)
+        if (i >= scene.instances.size())
+            throw Error("build_rebraid: instance " + std::to_string(i) + " of a scene with " +
+                        std::to_string(scene.instances.size()) + " instances");
     const BuildTimer timer;
+    const std::vector<ObjectSupportTables> support_tables =
+        object_support_tables(scene, object_bvhs, instances, settings);
     const bool is_guarded =
         settings.opening_rule != OpeningRule::extent && settings.keep_cheaper_unopened;
     const bool is_searching = settings.budget_doublings > 0;
-    TrackedBuild result =
-        build_rebraid_once(scene, object_bvhs, settings, instances, is_guarded || is_searching);
+    TrackedBuild result = build_rebraid_once(scene, object_bvhs, support_tables, settings,
+                                             instances, is_guarded || is_searching);
     if (is_searching)
-        result = search_larger_budgets(scene, object_bvhs, settings, instances, std::move(result));
+        result = search_larger_budgets(scene, object_bvhs, support_tables, settings, instances,
+                                       std::move(result));
     if (is_guarded && result.build.opened > 0) {
         // The opening rules estimate; the guard measures: the same instances without any
         // opening, kept when its exact cost is not higher.
@@ -311,7 +325,8 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
         unopened.opening_rule = OpeningRule::extent;
         unopened.budget_rule = BudgetRule::per_instance;
         unopened.budget_factor = 0.0f;
-        TrackedBuild plain = build_rebraid_once(scene, object_bvhs, unopened, instances, true);
+        TrackedBuild plain =
+            build_rebraid_once(scene, object_bvhs, support_tables, unopened, instances, true);
         if (plain.cost <= result.cost) {
             plain.build.budget = result.build.budget;
             result = std::move(plain);
@@ -323,12 +338,11 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
 
 namespace {
 
+/// One top-level build; build_rebraid has checked the inputs.
 TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                                std::span<const ObjectSupportTables> support_tables,
                                 const RebraidSettings& settings,
                                 std::span<const InstanceId> instances, bool is_tracking_cost) {
-    if (object_bvhs.size() != scene.meshes.size())
-        throw Error("build_rebraid: " + std::to_string(object_bvhs.size()) + " object BVHs for " +
-                    std::to_string(scene.meshes.size()) + " meshes");
     std::vector<std::uint32_t> instance_mesh(scene.instances.size());
     std::vector<AffineTransform> object_to_world(scene.instances.size());
     for (std::size_t i = 0; i < scene.instances.size(); ++i) {
@@ -337,9 +351,6 @@ TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> o
     }
     std::uint64_t seed_count = 0, primitive_count = 0;
     for (const InstanceId i : instances) {
-        if (i >= scene.instances.size())
-            throw Error("build_rebraid: instance " + std::to_string(i) + " of a scene with " +
-                        std::to_string(scene.instances.size()) + " instances");
         const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
         if (bvh.root.is_empty()) continue;
         ++seed_count;
@@ -370,8 +381,6 @@ TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> o
     for (const InstanceId i : instances)
         if (!object_bvhs[instance_mesh[i]].root.is_empty()) seeded.push_back(i);
     const auto n = std::uint32_t(seeded.size());
-    const std::vector<ObjectSupportTables> support_tables =
-        object_support_tables(object_bvhs, instance_mesh, seeded, settings);
     BRefSource source{object_bvhs,   instance_mesh,        object_to_world, settings.bounds_rule,
                       nullptr,       settings.open_leaves, node_cost,       removed_cost,
                       support_tables};
