@@ -9,6 +9,7 @@
 
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/generators/mesh_generators.h"
+#include "support/placed_vertices.h"
 
 namespace rebraid {
 namespace {
@@ -23,21 +24,6 @@ void collect(const ObjectBvh& bvh, NodeRef ref, const BBox3f& box,
         collect(bvh, node.children[c], node.child_bounds(c), out);
 }
 
-/// World-space box of every triangle corner reachable from `ref`.
-BBox3f exact_world_bounds(const ObjectBvh& bvh, NodeRef ref, const AffineTransform& to_world) {
-    BBox3f box;
-    if (ref.is_leaf()) {
-        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i)
-            for (const Vec3f& v : {bvh.triangles[i].v0, bvh.triangles[i].v1, bvh.triangles[i].v2})
-                box.extend(to_world.transform_point(v));
-        return box;
-    }
-    const WideNode& node = bvh.nodes[ref.node_id()];
-    for (int c = 0; c < kBvhWidth && !node.children[c].is_empty(); ++c)
-        box.extend(exact_world_bounds(bvh, node.children[c], to_world));
-    return box;
-}
-
 TEST(BRefBounds, BothRulesBoundTheTrianglesAndChildrenIsTighter) {
     const ObjectBvh bvh = build_object_bvh(make_torus_knot());
     const AffineTransform to_world = AffineTransform::translate({5, -2, 1}) *
@@ -48,7 +34,7 @@ TEST(BRefBounds, BothRulesBoundTheTrianglesAndChildrenIsTighter) {
     ASSERT_GT(nodes.size(), 20u);
     float box_area = 0, children_area = 0;
     for (const auto& [ref, box] : nodes) {
-        const BBox3f exact = exact_world_bounds(bvh, ref, to_world);
+        const BBox3f exact = test::placed_vertex_bounds(bvh, ref, to_world);
         const BBox3f paper =
             bref_world_bounds(bvh, ref, box, to_world, BRefBoundsRule::transformed_box);
         const BBox3f tight =
