@@ -158,10 +158,20 @@ TEST(CliMessages, DirectoryAsOutputFileIsNamed) {
                  "ray file '" + dir.string() + "' is a directory; give a file name");
 }
 
+/// A new folder that every user may enter: the temporary folder's, since the build folder may
+/// sit below one only its owner can enter, where the user the command runs as below would
+/// be stopped by that folder instead of by the file under test.
+fs::path folder_anyone_can_enter() {
+    std::string pattern = (fs::temp_directory_path() / "rebraid_locked_XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) return {};
+    fs::permissions(pattern, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                 fs::perms::others_read | fs::perms::others_exec);
+    return pattern;
+}
+
 TEST(CliMessages, UnreadableAndUnwritableFilesGiveThePermissionReason) {
-    const fs::path dir = scratch_dir() / "locked";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    const fs::path dir = folder_anyone_can_enter();
+    ASSERT_FALSE(dir.empty()) << "cannot make a folder in " << fs::temp_directory_path();
     const fs::path rays = dir / "rays.txt";
     test::write_text_file(rays, "0 0 5 0 0 -1 0 inf\n");
     fs::permissions(rays, fs::perms::none);
@@ -173,15 +183,15 @@ TEST(CliMessages, UnreadableAndUnwritableFilesGiveThePermissionReason) {
     const std::string as_user =
         ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
     const CommandResult read = test::run_shell_in(
-        scratch_dir(),
+        dir,
         as_user + test::rebraid_command_line(std::vector<std::string>{"trace", rays.string()}));
     expect_error(read, "ray file '" + rays.string() + "': Permission denied");
     const CommandResult write = test::run_shell_in(
-        scratch_dir(),
-        as_user + test::rebraid_command_line(std::vector<std::string>{
-                      "rays", "-n", "10", "-o", (read_only_dir / "r.txt").string()}));
+        dir, as_user + test::rebraid_command_line(std::vector<std::string>{
+                           "rays", "-n", "10", "-o", (read_only_dir / "r.txt").string()}));
     expect_error(write, "r.txt': Permission denied");
     fs::permissions(read_only_dir, fs::perms::owner_all);
+    fs::remove_all(dir);
 }
 
 // ---- Checked before the long work ------------------------------------------------------------
