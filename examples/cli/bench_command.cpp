@@ -8,12 +8,14 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "accel_factory.h"
@@ -21,6 +23,8 @@
 #include "commands.h"
 #include "embree_glue/reference/embree_reference.h"
 #include "option_checks.h"
+#include "output_file.h"
+#include "rebraid/io/ray_file.h"
 #include "scene_source.h"
 #include "stats_json.h"
 #include "status_line.h"
@@ -39,7 +43,19 @@ struct BenchOptions {
     BenchRaySettings rays;
     int repetitions = 5;
     bool is_json = false;
+    /// Folder the rays are written to, or empty (see --save-rays).
+    std::string save_rays_dir;
 };
+
+/// The ray files --save-rays writes for the scene at `path` (empty: the default scene):
+/// DIR/NAME.primary.rays and DIR/NAME.diffuse.rays, NAME the file's stem.
+std::pair<std::string, std::string> saved_ray_paths(const std::string& dir,
+                                                    const std::string& path) {
+    const std::string name =
+        path.empty() ? std::string("default") : std::filesystem::path(path).stem().string();
+    const std::filesystem::path base = std::filesystem::path(dir) / name;
+    return {base.string() + ".primary.rays", base.string() + ".diffuse.rays"};
+}
 
 /// Closest-hit throughput of one structure on one ray set.
 struct TraceTiming {
@@ -198,6 +214,11 @@ void run_bench(const BenchOptions& options) {
     for (std::string& path : scene_paths) {
         if (path == kDefaultSceneToken) path.clear();  // load_scene's name for it
         check_scene_file(path);
+        if (!options.save_rays_dir.empty()) {
+            const auto [primary, diffuse] = saved_ray_paths(options.save_rays_dir, path);
+            check_output_file(primary, "ray file");
+            check_output_file(diffuse, "ray file");
+        }
     }
     nlohmann::ordered_json all_results = nlohmann::ordered_json::array();
     StatusLine status;
@@ -215,6 +236,11 @@ void run_bench(const BenchOptions& options) {
             // scene, even those whose flattened form does not.
             const glue::EmbreeInstancedAccel reference(scene);
             rays = make_bench_rays(scene, reference, options.rays);
+        }
+        if (!options.save_rays_dir.empty()) {
+            const auto [primary, diffuse] = saved_ray_paths(options.save_rays_dir, path);
+            write_output(primary, [&](std::ostream& out) { write_rays(out, rays.primary); });
+            write_output(diffuse, [&](std::ostream& out) { write_rays(out, rays.diffuse); });
         }
         status.clear();
         if (!options.is_json) print_scene_header(scene_name, scene, rays, options, name_width);
@@ -291,6 +317,12 @@ void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& acti
                       "print one JSON array: an object per scene and structure (scene, accel, "
                       "build_ms, sah, mrays_primary, mrays_diffuse, the stats fields, nodes, "
                       "triangles and object entries per diffuse ray, ...)");
+    command
+        ->add_option("--save-rays", options->save_rays_dir,
+                     "also write each scene's primary and diffuse rays to DIR/NAME.primary.rays "
+                     "and DIR/NAME.diffuse.rays (NAME: the scene file's stem, or 'default'), to "
+                     "trace the same rays again with 'rebraid trace'")
+        ->type_name("DIR");
     add_accel_build_options(*command, options->accel_options);
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_bench(*options); }; });

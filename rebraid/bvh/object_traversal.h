@@ -76,10 +76,11 @@ private:
 /// leaf order), so that the lookup's cache miss overlaps the rest of the traversal. (Asking
 /// for every visited leaf's ids instead cost more than the misses it hid.)
 template <class HitDataPrefetch = NoHitDataPrefetch>
-bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray,
+bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, PreparedRay& prepared,
                                      Hit& hit, TraversalCounters* counters,
                                      HitDataPrefetch&& prefetch_hit_data = {}) {
-    const TriangleGroupRay group_ray(ray.org, ray.dir);
+    TraversalRay& ray = prepared.ray;
+    const TriangleGroupRay& group_ray = prepared.triangle_ray;
     bool found = false;
     LeafTriangleLanes lanes(bvh.triangles.data());
     const auto test_lanes = [&] {
@@ -102,14 +103,14 @@ bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, Traver
         return false;
     };
     traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
-        bvh.nodes.data(), start, ray, counters, visit_leaves);
+        bvh.nodes.data(), start, prepared, counters, visit_leaves);
     return found;
 }
 
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
 /// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v/prim_id (mesh primID) and
 /// returns true; leaves hit.instance_id to the caller.
-inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray, Hit& hit,
+inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, PreparedRay& ray, Hit& hit,
                                  TraversalCounters* counters) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids.data();
@@ -125,9 +126,10 @@ inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalR
 }
 
 /// True when any triangle below `start` is hit within [ray.tnear, ray.tfar].
-inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalRay& ray,
+inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, PreparedRay& prepared,
                                 TraversalCounters* counters) {
-    const TriangleGroupRay group_ray(ray.org, ray.dir);
+    const TraversalRay& ray = prepared.ray;
+    const TriangleGroupRay& group_ray = prepared.triangle_ray;
     LeafTriangleLanes lanes(bvh.triangles.data());
     bool is_occluded = false;
     const auto test_lanes = [&] {
@@ -142,7 +144,7 @@ inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, TraversalRa
     // Any order: the first hit ends the query, and sorting the children costs more than the
     // nearer hits it would find first (measured on the shared scenes).
     return traverse_bvh<TraversalOrder::any, LeafVisits::with_siblings>(
-        bvh.nodes.data(), start, ray, counters, visit_leaves);
+        bvh.nodes.data(), start, prepared, counters, visit_leaves);
 }
 
 }  // namespace REBRAID_SIMD_NAMESPACE

@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "rebraid/bvh/node_box_test.h"
-#include "rebraid/bvh/traversal_ray.h"
+#include "rebraid/bvh/prepared_ray.h"
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/accel.h"
 #include "rebraid/core/ray.h"
@@ -54,9 +54,9 @@ struct NoLeafPrefetch {
 };
 
 /// Depth-first traversal of the wide BVH `nodes` from `start` (any node, or a leaf
-/// reference). `visit_leaf` tests leaves' primitives (one leaf or several, see LeafVisits),
-/// shrinking ray.tfar on hits, and returns true to stop traversal (any-hit queries). Returns
-/// whether traversal was stopped by visit_leaf.
+/// reference) for a ray prepared in the BVH's space. `visit_leaf` tests leaves' primitives
+/// (one leaf or several, see LeafVisits), shrinking prepared.ray.tfar on hits, and returns true to
+/// stop traversal (any-hit queries). Returns whether traversal was stopped by visit_leaf.
 /// `prefetch_leaf(NodeRef leaf)` is called for hit leaves that wait on the stack (only with
 /// LeafVisits::one_by_one), and every stacked inner node is prefetched: on scenes larger
 /// than the caches, the misses of the siblings then overlap with the work on the nearest
@@ -64,7 +64,7 @@ struct NoLeafPrefetch {
 template <TraversalOrder order = TraversalOrder::nearest_first,
           LeafVisits leaf_visits = LeafVisits::one_by_one, class LeafVisitor,
           class LeafPrefetcher = NoLeafPrefetch>
-bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
+bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                   TraversalCounters* counters, LeafVisitor&& visit_leaf,
                   LeafPrefetcher&& prefetch_leaf = {}) {
     constexpr bool kWithSiblings = leaf_visits == LeafVisits::with_siblings;
@@ -91,7 +91,8 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, TraversalRay& ray,
             prefetch_node(nodes, ref);
         return (std::uint64_t(std::bit_cast<std::uint32_t>(distance)) << 32) | ref.bits();
     };
-    const NodeBoxTest box_test(ray);
+    TraversalRay& ray = prepared.ray;
+    const NodeBoxTest& box_test = prepared.box_test;
     NodeRef current = start;
     for (;;) {
         while (current.is_inner()) {

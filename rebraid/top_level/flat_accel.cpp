@@ -83,7 +83,7 @@ FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
 
 Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
     Hit hit;
-    TraversalRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
     // The id lookup after traversal would miss the cache on large scenes: the ids of each
     // hit are asked for as it is found.
@@ -103,7 +103,7 @@ Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) co
 }
 
 bool FlatAccel::occluded(const Ray& ray) const {
-    TraversalRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     return occluded_object_bvh(bvh_, bvh_.root, traversal_ray, nullptr);
 }
 

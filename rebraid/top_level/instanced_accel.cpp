@@ -32,38 +32,39 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
 
 namespace {
 
-/// The ray mapped into the object space of the instance a top-level item names, made once
-/// per run of items of the same instance (a re-braided top level holds several items per
+/// The ray mapped into the object space of the instance a top-level item names, prepared
+/// once per run of items of the same instance (a re-braided top level holds several items per
 /// instance, often side by side in one leaf). t is invariant under the affine map, so
 /// tnear and tfar carry over unchanged. Instances placed by the identity (objects built in
-/// world space, the paper's common case) use the world ray itself: no transform, no
-/// reciprocals, and the same numbers, since the identity maps every finite ray exactly.
+/// world space, the paper's common case) use the prepared world ray itself: no transform, no
+/// reciprocals, no broadcasts, and the same numbers, since the identity maps every finite ray
+/// exactly.
 class ObjectRayCache {
 public:
-    ObjectRayCache(TraversalRay& world_ray, std::span<const AffineTransform> world_to_object,
+    ObjectRayCache(PreparedRay& world_ray, std::span<const AffineTransform> world_to_object,
                    std::span<const std::uint8_t> is_identity)
         : world_ray_(world_ray), world_to_object_(world_to_object), is_identity_(is_identity) {}
 
-    TraversalRay& ray_for(InstanceId instance_id) {
+    PreparedRay& ray_for(InstanceId instance_id) {
         if (is_identity_[instance_id]) return world_ray_;
+        const TraversalRay& world = world_ray_.ray;
         if (instance_id != instance_id_) {
             const AffineTransform& to_object = world_to_object_[instance_id];
-            ray_.emplace(to_object.transform_point(world_ray_.org),
-                         to_object.transform_vector(world_ray_.dir), world_ray_.tnear,
-                         world_ray_.tfar);
+            ray_.emplace(to_object.transform_point(world.org),
+                         to_object.transform_vector(world.dir), world.tnear, world.tfar);
             instance_id_ = instance_id;
         }
-        ray_->tnear = world_ray_.tnear;
-        ray_->tfar = world_ray_.tfar;
+        ray_->ray.tnear = world.tnear;
+        ray_->ray.tfar = world.tfar;
         return *ray_;
     }
 
 private:
-    TraversalRay& world_ray_;
+    PreparedRay& world_ray_;
     std::span<const AffineTransform> world_to_object_;
     std::span<const std::uint8_t> is_identity_;
     InstanceId instance_id_ = kInvalidId;
-    std::optional<TraversalRay> ray_;
+    std::optional<PreparedRay> ray_;
 };
 
 }  // namespace
@@ -79,17 +80,17 @@ void InstancedAccel::prefetch_item_target(NodeRef leaf) const {
 
 Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
     Hit hit;
-    TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray, world_to_object_, instance_is_identity_);
     const auto enter_items = [&](NodeRef leaf) {
         const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
             const TopLevelItem& item = top_.items[i];
             if (counters) ++counters->object_entries;
-            TraversalRay& object_ray = object_rays.ray_for(item.instance_id);
+            PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
             if (intersect_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
                                      item.object_node, object_ray, hit, counters)) {
-                world_ray.tfar = object_ray.tfar;
+                world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
         }
@@ -103,7 +104,7 @@ Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counter
 }
 
 bool InstancedAccel::occluded(const Ray& ray) const {
-    TraversalRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray, world_to_object_, instance_is_identity_);
     // Any order: the first hit ends the query.
     return traverse_bvh<TraversalOrder::any>(
@@ -111,7 +112,7 @@ bool InstancedAccel::occluded(const Ray& ray) const {
             const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
             for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
                 const TopLevelItem& item = top_.items[i];
-                TraversalRay& object_ray = object_rays.ray_for(item.instance_id);
+                PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
                 if (occluded_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
                                         item.object_node, object_ray, nullptr))
                     return true;

@@ -237,11 +237,11 @@ TEST(Traversal, StartsAtAnyNodeOfAnObjectBvh) {
                     expect_hit = true;
                 }
             }
-            TraversalRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+            PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
             Hit hit;
             const bool found = intersect_object_bvh(bvh, starts[s], traversal_ray, hit, nullptr);
             ASSERT_EQ(found, expect_hit) << "start " << s;
-            TraversalRay occlusion_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+            PreparedRay occlusion_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
             EXPECT_EQ(occluded_object_bvh(bvh, starts[s], occlusion_ray, nullptr), expect_hit);
             if (!found) continue;
             ++compared_hits;
