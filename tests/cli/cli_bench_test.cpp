@@ -117,6 +117,32 @@ TEST(CliBench, TableListsTheChosenStructuresWithTheirBuilder) {
     EXPECT_EQ(result.out.find("rebraid "), std::string::npos) << result.out;
 }
 
+TEST(CliBench, SavedRaysAreTheRaysItTraced) {
+    const fs::path dir = test::test_scratch_dir("cli_bench_test") / "saved_rays";
+    fs::remove_all(dir);
+    const std::string scene = shared_scene("motion_capture_rom.glb");
+    const CommandResult bench =
+        run_rebraid({"bench", scene, "--rays", "300", "--repetitions", "1", "--accel", "flat",
+                     "--json", "--save-rays", dir.string()});
+    ASSERT_EQ(bench.exit_code, 0) << bench.err;
+    const nlohmann::json row = nlohmann::json::parse(bench.out).at(0);
+    const std::map<std::string, std::string> hit_keys{{"primary", "hits_primary"},
+                                                      {"diffuse", "hits_diffuse"}};
+    for (const auto& [kind, key] : hit_keys) {
+        const fs::path rays = dir / ("motion_capture_rom." + kind + ".rays");
+        ASSERT_TRUE(fs::exists(rays)) << rays;
+        // Tracing the saved rays again finds as many hits as the bench counted on them.
+        const CommandResult trace = run_rebraid({"trace", scene, rays.string(), "--accel", "flat"});
+        ASSERT_EQ(trace.exit_code, 0) << trace.err;
+        std::istringstream lines(trace.out);
+        std::size_t ray_count = 0, hit_count = 0;
+        for (std::string line; std::getline(lines, line); ++ray_count)
+            hit_count += line.rfind("inf ", 0) != 0;
+        EXPECT_EQ(ray_count, 300u) << kind;
+        EXPECT_EQ(hit_count, row.at(key).get<std::size_t>()) << kind;
+    }
+}
+
 TEST(CliBench, ObjectBuilderAndRebraidSettingsReachTheJson) {
     const CommandResult result =
         run_rebraid({"bench", shared_scene("motion_capture_rom.glb"), "--rays", "200",
