@@ -35,6 +35,7 @@ std::string_view stats_field_note(std::string_view key) {
     if (key == "brefs") return "top-level references: one per instance, plus those opening added";
     if (key == "budget") return "extra BRefs opening may add beyond one per instance";
     if (key == "opened") return "BRefs opened into their children";
+    if (key == "kernels") return "instruction set of the traversal (REBRAID_SIMD chooses)";
     return {};
 }
 

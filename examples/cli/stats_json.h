@@ -27,6 +27,7 @@ void for_each_stats_field(const AccelStats& stats, Visitor&& visit) {
     visit("brefs", stats.brefs);
     visit("budget", stats.budget);
     visit("opened", stats.opened);
+    visit("kernels", stats.kernels);
 }
 
 template <class T>

@@ -33,6 +33,8 @@ struct AccelStats {
     std::optional<std::uint64_t> brefs;   ///< rebraid: BRefs after opening
     std::optional<std::uint64_t> budget;  ///< rebraid: BRef array capacity
     std::optional<std::uint64_t> opened;  ///< rebraid: BRefs opened
+    /// Instruction set of the traversal kernels rays take (simd_level.h), where one is chosen.
+    std::optional<std::string> kernels;
 };
 
 /// A built acceleration structure over a Scene, answering rays in the project's terms

@@ -3,11 +3,11 @@
 #include <tbb/parallel_for.h>
 
 #include "rebraid/bvh/object_bvh_builder.h"
-#include "rebraid/bvh/object_traversal.h"
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/huge_pages.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/top_level/bvh_stats.h"
+#include "rebraid/top_level/trace_kernels.h"
 
 namespace rebraid {
 namespace {
@@ -69,7 +69,8 @@ void renumber_in_leaf_order(ObjectBvh& bvh, std::vector<InstanceId>& triangle_in
 
 }  // namespace
 
-FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
+FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings)
+    : simd_level_(default_simd_level()), kernels_(&trace_kernels(simd_level_)) {
     scene.validate();
     const BuildTimer timer;
     const Mesh world = make_world_mesh(scene, triangle_instance_, triangle_prim_);
@@ -82,29 +83,16 @@ FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings) {
 }
 
 Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
-    Hit hit;
-    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
-    // The id lookup after traversal would miss the cache on large scenes: the ids of each
-    // hit are asked for as it is found.
-    const InstanceId* instances = triangle_instance_.data();
-    const PrimId* prims = triangle_prim_.data();
-    const auto prefetch_ids = [instances, prims](std::uint32_t position) {
-        __builtin_prefetch(instances + position);
-        __builtin_prefetch(prims + position);
-    };
-    if (intersect_object_bvh_leaf_order(bvh_, bvh_.root, traversal_ray, hit, counters,
-                                        prefetch_ids)) {
-        const PrimId world_prim = hit.prim_id;
-        hit.instance_id = triangle_instance_[world_prim];
-        hit.prim_id = triangle_prim_[world_prim];
-    }
-    return hit;
+    return kernels_->flat_intersect(*this, ray, counters);
 }
 
 bool FlatAccel::occluded(const Ray& ray) const {
-    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    return occluded_object_bvh(bvh_, bvh_.root, traversal_ray, nullptr);
+    return kernels_->flat_occluded(*this, ray);
+}
+
+void FlatAccel::set_simd_level(SimdLevel level) {
+    kernels_ = &trace_kernels(level);
+    simd_level_ = level;
 }
 
 AccelStats FlatAccel::stats() const {
@@ -122,6 +110,7 @@ AccelStats FlatAccel::stats() const {
     hash.add<InstanceId>(triangle_instance_);
     hash.add<PrimId>(triangle_prim_);
     stats.structure_hash = hash.value();
+    stats.kernels = std::string(simd_level_name(simd_level_));
     return stats;
 }
 

@@ -6,8 +6,11 @@
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/core/accel.h"
 #include "rebraid/core/scene.h"
+#include "rebraid/core/simd_level.h"
 
 namespace rebraid {
+
+struct TraceKernels;
 
 /// One BVH over every instance's triangles in world space: no instancing, the quality
 /// reference (and the memory cost two-level structures avoid).
@@ -24,11 +27,19 @@ public:
     const std::vector<InstanceId>& triangle_instances() const { return triangle_instance_; }
     const std::vector<PrimId>& triangle_prims() const { return triangle_prim_; }
 
+    /// The kernel level rays are traced with: default_simd_level() at construction.
+    SimdLevel simd_level() const { return simd_level_; }
+    /// Traces with `level`'s kernels from now on (same hits at every level; to compare them).
+    /// Throws rebraid::Error when this build or CPU cannot run it. Not while tracing.
+    void set_simd_level(SimdLevel level);
+
 private:
     ObjectBvh bvh_;
     std::vector<InstanceId> triangle_instance_;
     std::vector<PrimId> triangle_prim_;
     AccelStats build_info_;
+    SimdLevel simd_level_;
+    const TraceKernels* kernels_;
 };
 
 }  // namespace rebraid

@@ -1,20 +1,20 @@
 #include "rebraid/top_level/instanced_accel.h"
 
-#include <optional>
-#include <span>
-
-#include "rebraid/bvh/object_traversal.h"
-#include "rebraid/bvh/traversal.h"
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/top_level/bvh_stats.h"
+#include "rebraid/top_level/trace_kernels.h"
 #include "rebraid/top_level/two_level_builder.h"
 
 namespace rebraid {
 
 InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs,
                                TopLevelBvh top, const AccelStats& build_info)
-    : object_bvhs_(std::move(object_bvhs)), top_(std::move(top)), build_info_(build_info) {
+    : object_bvhs_(std::move(object_bvhs)),
+      top_(std::move(top)),
+      build_info_(build_info),
+      simd_level_(default_simd_level()),
+      kernels_(&trace_kernels(simd_level_)) {
     instance_mesh_.reserve(scene.instances.size());
     object_to_world_.reserve(scene.instances.size());
     world_to_object_.reserve(scene.instances.size());
@@ -30,95 +30,17 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     build_info_.meshes = scene.meshes.size();
 }
 
-namespace {
-
-/// The ray mapped into the object space of the instance a top-level item names, prepared
-/// once per run of items of the same instance (a re-braided top level holds several items per
-/// instance, often side by side in one leaf). t is invariant under the affine map, so
-/// tnear and tfar carry over unchanged. Instances placed by the identity (objects built in
-/// world space, the paper's common case) use the prepared world ray itself: no transform, no
-/// reciprocals, no broadcasts, and the same numbers, since the identity maps every finite ray
-/// exactly.
-class ObjectRayCache {
-public:
-    ObjectRayCache(PreparedRay& world_ray, std::span<const AffineTransform> world_to_object,
-                   std::span<const std::uint8_t> is_identity)
-        : world_ray_(world_ray), world_to_object_(world_to_object), is_identity_(is_identity) {}
-
-    PreparedRay& ray_for(InstanceId instance_id) {
-        if (is_identity_[instance_id]) return world_ray_;
-        const TraversalRay& world = world_ray_.ray;
-        if (instance_id != instance_id_) {
-            const AffineTransform& to_object = world_to_object_[instance_id];
-            ray_.emplace(to_object.transform_point(world.org),
-                         to_object.transform_vector(world.dir), world.tnear, world.tfar);
-            instance_id_ = instance_id;
-        }
-        ray_->ray.tnear = world.tnear;
-        ray_->ray.tfar = world.tfar;
-        return *ray_;
-    }
-
-private:
-    PreparedRay& world_ray_;
-    std::span<const AffineTransform> world_to_object_;
-    std::span<const std::uint8_t> is_identity_;
-    InstanceId instance_id_ = kInvalidId;
-    std::optional<PreparedRay> ray_;
-};
-
-}  // namespace
-
-void InstancedAccel::prefetch_item_target(NodeRef leaf) const {
-    const TopLevelItem& item = top_.items[leaf.first_prim()];
-    const ObjectBvh& bvh = object_bvhs_[instance_mesh_[item.instance_id]];
-    if (item.object_node.is_leaf())
-        __builtin_prefetch(bvh.triangles.data() + item.object_node.first_prim());
-    else
-        prefetch_node(bvh.nodes.data(), item.object_node);
-}
-
 Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
-    Hit hit;
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    ObjectRayCache object_rays(world_ray, world_to_object_, instance_is_identity_);
-    const auto enter_items = [&](NodeRef leaf) {
-        const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
-        for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
-            const TopLevelItem& item = top_.items[i];
-            if (counters) ++counters->object_entries;
-            PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
-            if (intersect_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
-                                     item.object_node, object_ray, hit, counters)) {
-                world_ray.ray.tfar = object_ray.ray.tfar;
-                hit.instance_id = item.instance_id;
-            }
-        }
-        return false;
-    };
-    // A stacked item's object node is asked for as the item is stacked, as a flat BVH's
-    // stacked nodes are: its miss then overlaps the work on nearer items.
-    const auto prefetch_item = [this](NodeRef leaf) { prefetch_item_target(leaf); };
-    traverse_bvh(top_.nodes.data(), top_.root, world_ray, counters, enter_items, prefetch_item);
-    return hit;
+    return kernels_->instanced_intersect(*this, ray, counters);
 }
 
 bool InstancedAccel::occluded(const Ray& ray) const {
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    ObjectRayCache object_rays(world_ray, world_to_object_, instance_is_identity_);
-    // Any order: the first hit ends the query.
-    return traverse_bvh<TraversalOrder::any>(
-        top_.nodes.data(), top_.root, world_ray, nullptr, [&](NodeRef leaf) {
-            const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
-            for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
-                const TopLevelItem& item = top_.items[i];
-                PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
-                if (occluded_object_bvh(object_bvhs_[instance_mesh_[item.instance_id]],
-                                        item.object_node, object_ray, nullptr))
-                    return true;
-            }
-            return false;
-        });
+    return kernels_->instanced_occluded(*this, ray);
+}
+
+void InstancedAccel::set_simd_level(SimdLevel level) {
+    kernels_ = &trace_kernels(level);
+    simd_level_ = level;
 }
 
 AccelStats InstancedAccel::stats() const {
@@ -145,6 +67,7 @@ AccelStats InstancedAccel::stats() const {
     stats.leaves = leaves;
     stats.memory_bytes = memory;
     stats.structure_hash = hash.value();
+    stats.kernels = std::string(simd_level_name(simd_level_));
     return stats;
 }
 

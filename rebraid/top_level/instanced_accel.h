@@ -8,9 +8,13 @@
 #include "rebraid/bvh/object_bvh_builder.h"
 #include "rebraid/core/accel.h"
 #include "rebraid/core/scene.h"
+#include "rebraid/core/simd_level.h"
+#include "rebraid/core/transform.h"
 #include "rebraid/top_level/top_level_bvh.h"
 
 namespace rebraid {
+
+struct TraceKernels;
 
 /// A two-level structure: object BVHs per mesh plus a top level whose leaves reference
 /// (instance, object node) pairs. Serves both the plain two-level top and the re-braided one:
@@ -38,11 +42,18 @@ public:
     TopLevelBvh release_top_level() && { return std::move(top_); }
     /// Mesh of each instance (index = InstanceId).
     const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
+    /// Inverse transform of each instance, made at construction.
+    const std::vector<AffineTransform>& world_to_object() const { return world_to_object_; }
+    /// 1 where an instance's transform is the identity: rays enter it unmapped.
+    const std::vector<std::uint8_t>& instance_is_identity() const { return instance_is_identity_; }
+
+    /// The kernel level rays are traced with: default_simd_level() at construction.
+    SimdLevel simd_level() const { return simd_level_; }
+    /// Traces with `level`'s kernels from now on (same hits at every level; to compare them).
+    /// Throws rebraid::Error when this build or CPU cannot run it. Not while tracing.
+    void set_simd_level(SimdLevel level);
 
 private:
-    /// Prefetches what entering the first item of top-level leaf `leaf` reads first.
-    void prefetch_item_target(NodeRef leaf) const;
-
     std::vector<ObjectBvh> object_bvhs_;
     TopLevelBvh top_;
     std::vector<std::uint32_t> instance_mesh_;
@@ -51,6 +62,8 @@ private:
     /// 1 where an instance's transform is the identity: rays enter it unmapped.
     std::vector<std::uint8_t> instance_is_identity_;
     AccelStats build_info_;
+    SimdLevel simd_level_;
+    const TraceKernels* kernels_;
 };
 
 /// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).

@@ -1,13 +1,18 @@
 // The project's structures against Embree's flat scene on the same rays: closest-hit
 // distance, instance and primitive ids, and occlusion, on shared, default and generated
-// scenes.
+// scenes, with the kernels of every level this build and CPU can run (simd_level.h).
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
+#include <string>
 
 #include "embree_glue/reference/embree_reference.h"
+#include "rebraid/core/simd_level.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/generators/random_rays.h"
 #include "rebraid/generators/world_space_objects.h"
@@ -40,15 +45,55 @@ std::vector<NamedAccel> project_accels() {
     };
 }
 
+/// Switches a project structure to `level`'s kernels.
+void use_simd_level(Accel& accel, SimdLevel level) {
+    if (auto* flat = dynamic_cast<FlatAccel*>(&accel))
+        flat->set_simd_level(level);
+    else
+        dynamic_cast<InstancedAccel&>(accel).set_simd_level(level);
+}
+
+/// Same hits, bit for bit, and same occlusion answers.
+void expect_identical_answers(const test::AccelAnswers& a, const test::AccelAnswers& b) {
+    ASSERT_EQ(a.hits.size(), b.hits.size());
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.hits.size(); ++i) {
+        const Hit& x = a.hits[i];
+        const Hit& y = b.hits[i];
+        const bool same = std::bit_cast<std::uint32_t>(x.t) == std::bit_cast<std::uint32_t>(y.t) &&
+                          x.instance_id == y.instance_id && x.prim_id == y.prim_id &&
+                          std::bit_cast<std::uint32_t>(x.u) == std::bit_cast<std::uint32_t>(y.u) &&
+                          std::bit_cast<std::uint32_t>(x.v) == std::bit_cast<std::uint32_t>(y.v) &&
+                          a.occluded[i] == b.occluded[i];
+        if (!same && differing++ < 5)
+            ADD_FAILURE() << "ray " << i << ": t " << x.t << " / " << y.t << ", ids "
+                          << x.instance_id << ":" << x.prim_id << " / " << y.instance_id << ":"
+                          << y.prim_id << ", occluded " << int(a.occluded[i]) << " / "
+                          << int(b.occluded[i]);
+    }
+    EXPECT_EQ(differing, 0u);
+}
+
 void expect_matches_embree_flat(const Scene& scene, const std::string& scene_name) {
     const glue::EmbreeFlatAccel reference(scene);
     const std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 10000, 42);
     const test::AccelAnswers expected = test::trace_all(reference, rays);
     for (const NamedAccel& named : project_accels()) {
-        SCOPED_TRACE(scene_name + " / " + named.name);
         const std::unique_ptr<Accel> accel = named.make(scene);
-        test::expect_same_answers(scene, rays, expected, test::trace_all(*accel, rays),
-                                  test::tolerance_for(scene.bounds()));
+        std::optional<test::AccelAnswers> avx2_answers;
+        for (SimdLevel level : runnable_simd_levels()) {
+            SCOPED_TRACE(scene_name + " / " + named.name + " / " +
+                         std::string(simd_level_name(level)));
+            use_simd_level(*accel, level);
+            test::AccelAnswers answers = test::trace_all(*accel, rays);
+            test::expect_same_answers(scene, rays, expected, answers,
+                                      test::tolerance_for(scene.bounds()));
+            // The AVX-512 kernels are the AVX2 sources compiled for AVX-512: same arithmetic,
+            // so the same bits.
+            if (level == SimdLevel::avx2) avx2_answers = std::move(answers);
+            if (level == SimdLevel::avx512 && avx2_answers)
+                expect_identical_answers(*avx2_answers, answers);
+        }
     }
 }
 

@@ -1,0 +1,146 @@
+#pragma once
+
+// The ray queries of FlatAccel and InstancedAccel, compiled once per kernel level: each
+// trace_kernels_<level>.cpp includes this file once, with the compiler targeting its level,
+// and the kernel headers then put everything below into that level's inline namespace
+// (simd_config.h). Include nowhere else.
+
+#include "rebraid/top_level/trace_kernel_prelude.h"
+
+#include "rebraid/bvh/object_traversal.h"
+#include "rebraid/bvh/prepared_ray.h"
+#include "rebraid/bvh/traversal.h"
+#include "rebraid/core/simd_config.h"
+
+namespace rebraid {
+inline namespace REBRAID_SIMD_NAMESPACE {
+
+inline Hit flat_intersect(const FlatAccel& accel, const Ray& ray, TraversalCounters* counters) {
+    Hit hit;
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
+    // The id lookup after traversal would miss the cache on large scenes: the ids of each
+    // hit are asked for as it is found.
+    const InstanceId* instances = accel.triangle_instances().data();
+    const PrimId* prims = accel.triangle_prims().data();
+    const auto prefetch_ids = [instances, prims](std::uint32_t position) {
+        __builtin_prefetch(instances + position);
+        __builtin_prefetch(prims + position);
+    };
+    const ObjectBvh& bvh = accel.bvh();
+    if (intersect_object_bvh_leaf_order(bvh, bvh.root, traversal_ray, hit, counters,
+                                        prefetch_ids)) {
+        const PrimId world_prim = hit.prim_id;
+        hit.instance_id = instances[world_prim];
+        hit.prim_id = prims[world_prim];
+    }
+    return hit;
+}
+
+inline bool flat_occluded(const FlatAccel& accel, const Ray& ray) {
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    return occluded_object_bvh(accel.bvh(), accel.bvh().root, traversal_ray, nullptr);
+}
+
+/// The ray mapped into the object space of the instance a top-level item names, prepared
+/// once per run of items of the same instance (a re-braided top level holds several items per
+/// instance, often side by side in one leaf). t is invariant under the affine map, so
+/// tnear and tfar carry over unchanged. Instances placed by the identity (objects built in
+/// world space, the paper's common case) use the prepared world ray itself: no transform, no
+/// reciprocals, no broadcasts, and the same numbers, since the identity maps every finite ray
+/// exactly.
+class ObjectRayCache {
+public:
+    ObjectRayCache(PreparedRay& world_ray, const InstancedAccel& accel)
+        : world_ray_(world_ray),
+          world_to_object_(accel.world_to_object()),
+          is_identity_(accel.instance_is_identity()) {}
+
+    PreparedRay& ray_for(InstanceId instance_id) {
+        if (is_identity_[instance_id]) return world_ray_;
+        const TraversalRay& world = world_ray_.ray;
+        if (instance_id != instance_id_) {
+            const AffineTransform& to_object = world_to_object_[instance_id];
+            ray_.emplace(to_object.transform_point(world.org),
+                         to_object.transform_vector(world.dir), world.tnear, world.tfar);
+            instance_id_ = instance_id;
+        }
+        ray_->ray.tnear = world.tnear;
+        ray_->ray.tfar = world.tfar;
+        return *ray_;
+    }
+
+private:
+    PreparedRay& world_ray_;
+    std::span<const AffineTransform> world_to_object_;
+    std::span<const std::uint8_t> is_identity_;
+    InstanceId instance_id_ = kInvalidId;
+    std::optional<PreparedRay> ray_;
+};
+
+/// Prefetches what entering the first item of top-level leaf `leaf` reads first.
+inline void prefetch_item_target(const InstancedAccel& accel, NodeRef leaf) {
+    const TopLevelItem& item = accel.top_level().items[leaf.first_prim()];
+    const ObjectBvh& bvh = accel.object_bvhs()[accel.instance_meshes()[item.instance_id]];
+    if (item.object_node.is_leaf())
+        __builtin_prefetch(bvh.triangles.data() + item.object_node.first_prim());
+    else
+        prefetch_node(bvh.nodes.data(), item.object_node);
+}
+
+inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
+                               TraversalCounters* counters) {
+    Hit hit;
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    ObjectRayCache object_rays(world_ray, accel);
+    const TopLevelBvh& top = accel.top_level();
+    const ObjectBvh* object_bvhs = accel.object_bvhs().data();
+    const std::uint32_t* instance_mesh = accel.instance_meshes().data();
+    const auto enter_items = [&](NodeRef leaf) {
+        const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
+        for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
+            const TopLevelItem& item = top.items[i];
+            if (counters) ++counters->object_entries;
+            PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
+            if (intersect_object_bvh(object_bvhs[instance_mesh[item.instance_id]], item.object_node,
+                                     object_ray, hit, counters)) {
+                world_ray.ray.tfar = object_ray.ray.tfar;
+                hit.instance_id = item.instance_id;
+            }
+        }
+        return false;
+    };
+    // A stacked item's object node is asked for as the item is stacked, as a flat BVH's
+    // stacked nodes are: its miss then overlaps the work on nearer items.
+    const auto prefetch_item = [&accel](NodeRef leaf) { prefetch_item_target(accel, leaf); };
+    traverse_bvh(top.nodes.data(), top.root, world_ray, counters, enter_items, prefetch_item);
+    return hit;
+}
+
+inline bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    ObjectRayCache object_rays(world_ray, accel);
+    const TopLevelBvh& top = accel.top_level();
+    const ObjectBvh* object_bvhs = accel.object_bvhs().data();
+    const std::uint32_t* instance_mesh = accel.instance_meshes().data();
+    // Any order: the first hit ends the query.
+    return traverse_bvh<TraversalOrder::any>(
+        top.nodes.data(), top.root, world_ray, nullptr, [&](NodeRef leaf) {
+            const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
+            for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
+                const TopLevelItem& item = top.items[i];
+                PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
+                if (occluded_object_bvh(object_bvhs[instance_mesh[item.instance_id]],
+                                        item.object_node, object_ray, nullptr))
+                    return true;
+            }
+            return false;
+        });
+}
+
+/// This level's entry points.
+inline constexpr TraceKernels kLevelTraceKernels{&flat_intersect, &flat_occluded,
+                                                 &instanced_intersect, &instanced_occluded};
+
+}  // namespace REBRAID_SIMD_NAMESPACE
+}  // namespace rebraid

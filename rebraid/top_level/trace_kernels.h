@@ -1,0 +1,26 @@
+#pragma once
+
+#include "rebraid/core/accel.h"
+#include "rebraid/core/ray.h"
+#include "rebraid/core/simd_level.h"
+
+namespace rebraid {
+
+class FlatAccel;
+class InstancedAccel;
+
+/// The ray queries of the project's structures at one kernel level (simd_level.h). A
+/// structure holds a pointer to one table and calls through it: one indirect call per ray
+/// selects the instruction set.
+struct TraceKernels {
+    Hit (*flat_intersect)(const FlatAccel& accel, const Ray& ray, TraversalCounters* counters);
+    bool (*flat_occluded)(const FlatAccel& accel, const Ray& ray);
+    Hit (*instanced_intersect)(const InstancedAccel& accel, const Ray& ray,
+                               TraversalCounters* counters);
+    bool (*instanced_occluded)(const InstancedAccel& accel, const Ray& ray);
+};
+
+/// The kernels of `level`. Throws rebraid::Error when this build or this CPU cannot run it.
+const TraceKernels& trace_kernels(SimdLevel level);
+
+}  // namespace rebraid
