@@ -158,8 +158,8 @@ private:
             criterion.selected = overlapping;
         }
         if (settings_.opening_rule != OpeningRule::extent &&
-            !estimate_opening(range(segment), targets_, criterion, source_, segment.free_space(),
-                              settings_)
+            !estimate_opening(range(segment), info, targets_, criterion, source_,
+                              segment.free_space(), settings_)
                  .lowers_sah())
             return 0;  // the subtree below may still open: its segments are smaller
         return open_brefs(segment, prims_, targets_, criterion, source_, threshold, &info);
