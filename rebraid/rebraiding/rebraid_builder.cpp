@@ -158,6 +158,9 @@ private:
             criterion.selected = overlapping;
         }
         if (settings_.opening_rule != OpeningRule::extent &&
+            segment.size() > settings_.estimate_max_brefs)
+            return 0;  // the segments below may still open
+        if (settings_.opening_rule != OpeningRule::extent &&
             !estimate_opening(range(segment), info, targets_, criterion, source_,
                               segment.free_space(), settings_)
                  .lowers_sah())
