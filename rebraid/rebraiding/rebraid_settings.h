@@ -97,9 +97,9 @@ struct RebraidSettings {
     /// OpeningRule::sah and overlap: segments of more BRefs than this open nothing themselves
     /// and skip the estimate (the segments below them still may open, with the whole free
     /// space). A segment's candidates are the BRefs wider than open_threshold of its extent,
-    /// and in large segments those rarely pay (on the measured scenes no segment above 800
-    /// BRefs did), while the estimate there costs a virtual build over all of them. Bounds
-    /// the estimate work per BRef, so the build scales with the instance count.
+    /// and in large segments those rarely pay (on the measured scenes the largest segment that
+    /// opened had 800 BRefs), while the estimate there costs a virtual build over all of
+    /// them. Bounds the estimate work per BRef (docs/design.md).
     std::uint32_t estimate_max_brefs = 1024;
     /// OpeningRule::sah and overlap: when the build opened anything, also build the top
     /// without opening and keep whichever has the lower exact SAH cost
