@@ -201,6 +201,7 @@ const std::vector<VariantKey>& variant_keys() {
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"instance-entry-cost", real_number(&Settings::instance_entry_cost)},
         {"estimate-levels", whole_number(&Settings::estimate_levels, 8)},
+        {"estimate-max-brefs", whole_number(&Settings::estimate_max_brefs, 1u << 30)},
         {"overlap-threshold", real_number(&Settings::overlap_threshold)},
         {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
     };

@@ -158,8 +158,11 @@ private:
             criterion.selected = overlapping;
         }
         if (settings_.opening_rule != OpeningRule::extent &&
-            !estimate_opening(range(segment), targets_, criterion, source_, segment.free_space(),
-                              settings_)
+            segment.size() > settings_.estimate_max_brefs)
+            return 0;  // the segments below may still open
+        if (settings_.opening_rule != OpeningRule::extent &&
+            !estimate_opening(range(segment), info, targets_, criterion, source_,
+                              segment.free_space(), settings_)
                  .lowers_sah())
             return 0;  // the subtree below may still open: its segments are smaller
         return open_brefs(segment, prims_, targets_, criterion, source_, threshold, &info);
@@ -180,8 +183,7 @@ private:
 
 /// Per mesh, the ObjectSupportTables of its BVH where the settings ask for vertex bounds and
 /// the mesh has support_table_instances `instances` of `scene` or more (others: no tables);
-/// empty when no mesh has. Made once per build_rebraid call: every build it makes (budget
-/// search, the unopened build of the guard) uses the same bounds rule.
+/// empty when no mesh has.
 std::vector<ObjectSupportTables> object_support_tables(const Scene& scene,
                                                        std::span<const ObjectBvh> object_bvhs,
                                                        std::span<const InstanceId> instances,
@@ -198,6 +200,70 @@ std::vector<ObjectSupportTables> object_support_tables(const Scene& scene,
         tables[meshes[k]] = ObjectSupportTables(object_bvhs[meshes[k]]);
     });
     return tables;
+}
+
+/// What every build of one build_rebraid call starts from, made once: the budget search and
+/// the cost guard build again over the same instances with the same bounds rule, and the
+/// seed BRefs' world boxes (vertex bounds: searches of the object BVHs) are most of what a
+/// build without opening costs.
+struct RebraidInputs {
+    std::span<const ObjectBvh> object_bvhs;
+    std::vector<std::uint32_t> instance_mesh;         ///< index = InstanceId
+    std::vector<AffineTransform> object_to_world;     ///< index = InstanceId
+    std::vector<ObjectSupportTables> support_tables;  ///< see object_support_tables
+    /// One seed BRef per instance of a non-empty mesh, at its object root (§3.2), in the
+    /// order of the instances asked for: its instance, world box and, when costs are
+    /// tracked, its root's cost inside the instance (rebraid_cost_guard.h).
+    std::vector<InstanceId> seeded;
+    std::vector<BBox3f> seed_bounds;
+    std::vector<double> seed_cost;
+    std::uint64_t primitive_count = 0;  ///< triangles of the seeded instances
+};
+
+RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
+                             std::span<const InstanceId> instances, const RebraidSettings& settings,
+                             bool is_tracking_cost) {
+    RebraidInputs inputs;
+    inputs.object_bvhs = object_bvhs;
+    inputs.instance_mesh.resize(scene.instances.size());
+    inputs.object_to_world.resize(scene.instances.size());
+    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+        inputs.instance_mesh[i] = scene.instances[i].mesh_id;
+        inputs.object_to_world[i] = scene.instances[i].object_to_world;
+    }
+    for (const InstanceId i : instances) {
+        const ObjectBvh& bvh = object_bvhs[inputs.instance_mesh[i]];
+        if (bvh.root.is_empty()) continue;
+        inputs.seeded.push_back(i);
+        inputs.primitive_count += bvh.prim_count();
+    }
+    const std::uint64_t limit = NodeRef::kMaxFirst;
+    if (inputs.seeded.size() > limit)
+        throw Error("build_rebraid: " + std::to_string(inputs.seeded.size()) +
+                    " instances exceed the limit of " + std::to_string(limit));
+    inputs.support_tables = object_support_tables(scene, object_bvhs, instances, settings);
+    const std::size_t n = inputs.seeded.size();
+    inputs.seed_bounds.resize(n);
+    if (is_tracking_cost) inputs.seed_cost.resize(n);
+    auto seed = [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const InstanceId i = inputs.seeded[k];
+            const std::uint32_t mesh = inputs.instance_mesh[i];
+            const ObjectBvh& bvh = object_bvhs[mesh];
+            const AffineTransform& to_world = inputs.object_to_world[i];
+            inputs.seed_bounds[k] = bref_world_bounds(
+                bvh, bvh.root, bvh.bounds, to_world, settings.bounds_rule,
+                inputs.support_tables.empty() ? nullptr : &inputs.support_tables[mesh]);
+            if (is_tracking_cost)
+                inputs.seed_cost[k] = mapped_box_half_area(bvh.bounds, to_world) *
+                                      (bvh.root.is_leaf() ? bvh.root.prim_count() : 1.0);
+        }
+    };
+    if (n < settings.build.parallel_threshold)
+        seed(0, 0, n);
+    else
+        for_each_block(n, seed);
+    return inputs;
 }
 
 /// Leaves reference the BRef array with its unused free space in between; renumber them into
@@ -240,10 +306,8 @@ struct TrackedBuild {
     double cost = 0.0;
 };
 
-TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
-                                std::span<const ObjectSupportTables> support_tables,
-                                const RebraidSettings& settings,
-                                std::span<const InstanceId> instances, bool is_tracking_cost);
+TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
+                                bool is_tracking_cost);
 
 /// The part of a top level's SAH cost (unnormalised) its own nodes and items make: the
 /// inner nodes' half areas and each item's box area, times its triangles for a leaf item.
@@ -260,10 +324,8 @@ double top_level_own_cost(const TopLevelBvh& top) {
 /// rule's budget; builds with the budget doubled follow while each lowers the exact cost by
 /// at least budget_search_min_gain, and the cheapest build is returned. The budgets tried and
 /// the costs compared depend on the input only, so the choice is the same on any thread count.
-TrackedBuild search_larger_budgets(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
-                                   std::span<const ObjectSupportTables> support_tables,
-                                   const RebraidSettings& settings,
-                                   std::span<const InstanceId> instances, TrackedBuild first) {
+TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSettings& settings,
+                                   TrackedBuild first) {
     TrackedBuild best = std::move(first);
     RebraidSettings larger = settings;
     std::uint64_t last_budget = best.build.budget;
@@ -272,8 +334,7 @@ TrackedBuild search_larger_budgets(const Scene& scene, std::span<const ObjectBvh
             larger.budget_factor *= 2.0f;
         else
             larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref * 0.5f);
-        TrackedBuild candidate =
-            build_rebraid_once(scene, object_bvhs, support_tables, larger, instances, true);
+        TrackedBuild candidate = build_rebraid_once(inputs, larger, true);
         // The caps (every primitive a BRef, max_budget) stop the budget from growing.
         if (candidate.build.budget <= last_budget) break;
         last_budget = candidate.build.budget;
@@ -308,16 +369,13 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
             throw Error("build_rebraid: instance " + std::to_string(i) + " of a scene with " +
                         std::to_string(scene.instances.size()) + " instances");
     const BuildTimer timer;
-    const std::vector<ObjectSupportTables> support_tables =
-        object_support_tables(scene, object_bvhs, instances, settings);
     const bool is_guarded =
         settings.opening_rule != OpeningRule::extent && settings.keep_cheaper_unopened;
     const bool is_searching = settings.budget_doublings > 0;
-    TrackedBuild result = build_rebraid_once(scene, object_bvhs, support_tables, settings,
-                                             instances, is_guarded || is_searching);
-    if (is_searching)
-        result = search_larger_budgets(scene, object_bvhs, support_tables, settings, instances,
-                                       std::move(result));
+    const RebraidInputs inputs =
+        rebraid_inputs(scene, object_bvhs, instances, settings, is_guarded || is_searching);
+    TrackedBuild result = build_rebraid_once(inputs, settings, is_guarded || is_searching);
+    if (is_searching) result = search_larger_budgets(inputs, settings, std::move(result));
     if (is_guarded && result.build.opened > 0) {
         // The opening rules estimate; the guard measures: the same instances without any
         // opening, kept when its exact cost is not higher.
@@ -325,8 +383,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
         unopened.opening_rule = OpeningRule::extent;
         unopened.budget_rule = BudgetRule::per_instance;
         unopened.budget_factor = 0.0f;
-        TrackedBuild plain =
-            build_rebraid_once(scene, object_bvhs, support_tables, unopened, instances, true);
+        TrackedBuild plain = build_rebraid_once(inputs, unopened, true);
         if (plain.cost <= result.cost) {
             plain.build.budget = result.build.budget;
             result = std::move(plain);
@@ -339,33 +396,17 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
 namespace {
 
 /// One top-level build; build_rebraid has checked the inputs.
-TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
-                                std::span<const ObjectSupportTables> support_tables,
-                                const RebraidSettings& settings,
-                                std::span<const InstanceId> instances, bool is_tracking_cost) {
-    std::vector<std::uint32_t> instance_mesh(scene.instances.size());
-    std::vector<AffineTransform> object_to_world(scene.instances.size());
-    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
-        instance_mesh[i] = scene.instances[i].mesh_id;
-        object_to_world[i] = scene.instances[i].object_to_world;
-    }
-    std::uint64_t seed_count = 0, primitive_count = 0;
-    for (const InstanceId i : instances) {
-        const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
-        if (bvh.root.is_empty()) continue;
-        ++seed_count;
-        primitive_count += bvh.prim_count();
-    }
+TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
+                                bool is_tracking_cost) {
+    const std::span<const ObjectBvh> object_bvhs = inputs.object_bvhs;
+    const auto n = std::uint32_t(inputs.seeded.size());
 
     // §5.2: one array for every BRef the build can ever hold, allocated once.
     RebraidBuild result;
     const std::uint64_t limit = NodeRef::kMaxFirst;
-    if (seed_count > limit)
-        throw Error("build_rebraid: " + std::to_string(seed_count) +
-                    " instances exceed the limit of " + std::to_string(limit));
     result.budget =
-        std::min(bref_budget(settings, seed_count, primitive_count), limit - seed_count);
-    const auto capacity = std::uint32_t(seed_count + result.budget);
+        std::min(bref_budget(settings, n, inputs.primitive_count), limit - std::uint64_t(n));
+    const auto capacity = std::uint32_t(n + result.budget);
     // Uninitialised: a slot is written before any segment holds it (free space is filled by
     // opening), and only slots that leaves hold are read at the end.
     const ScratchBuffer<BuildPrim> prim_buffer(capacity), scratch_buffer(capacity);
@@ -374,27 +415,23 @@ TrackedBuild build_rebraid_once(const Scene& scene, std::span<const ObjectBvh> o
     const std::span<BRefTarget> targets = target_buffer.span();
     std::vector<double> node_cost(is_tracking_cost ? capacity : 0);
     std::vector<double> removed_cost(is_tracking_cost ? capacity : 0);
-    // One BRef per instance at its object root, with the root's primitive count (§3.2): the
-    // slots first, then the bounds in parallel.
-    std::vector<InstanceId> seeded;
-    seeded.reserve(seed_count);
-    for (const InstanceId i : instances)
-        if (!object_bvhs[instance_mesh[i]].root.is_empty()) seeded.push_back(i);
-    const auto n = std::uint32_t(seeded.size());
-    BRefSource source{object_bvhs,   instance_mesh,        object_to_world, settings.bounds_rule,
-                      nullptr,       settings.open_leaves, node_cost,       removed_cost,
-                      support_tables};
+    BRefSource source{object_bvhs,
+                      inputs.instance_mesh,
+                      inputs.object_to_world,
+                      settings.bounds_rule,
+                      nullptr,
+                      settings.open_leaves,
+                      node_cost,
+                      removed_cost,
+                      inputs.support_tables};
+    // One BRef per instance at its object root, with the root's primitive count (§3.2).
     auto seed = [&](std::size_t, std::size_t begin, std::size_t end) {
         for (std::size_t slot = begin; slot < end; ++slot) {
-            const InstanceId i = seeded[slot];
-            const ObjectBvh& bvh = object_bvhs[instance_mesh[i]];
-            const AffineTransform& to_world = object_to_world[i];
+            const InstanceId i = inputs.seeded[slot];
+            const ObjectBvh& bvh = object_bvhs[inputs.instance_mesh[i]];
             targets[slot] = {i, bvh.root};
-            prims[slot] = {source.world_bounds(targets[slot], bvh.root, bvh.bounds),
-                           std::uint32_t(slot), bvh.prim_count()};
-            if (is_tracking_cost)
-                node_cost[slot] = mapped_box_half_area(bvh.bounds, to_world) *
-                                  (bvh.root.is_leaf() ? bvh.root.prim_count() : 1.0);
+            prims[slot] = {inputs.seed_bounds[slot], std::uint32_t(slot), bvh.prim_count()};
+            if (is_tracking_cost) node_cost[slot] = inputs.seed_cost[slot];
         }
     };
     if (n < settings.build.parallel_threshold)

@@ -94,6 +94,13 @@ struct RebraidSettings {
     /// assumes the nodes further down are as large as their parent. More levels judge large
     /// segments better and cost more build time.
     std::uint32_t estimate_levels = 2;
+    /// OpeningRule::sah and overlap: segments of more BRefs than this open nothing themselves
+    /// and skip the estimate (the segments below them still may open, with the whole free
+    /// space). A segment's candidates are the BRefs wider than open_threshold of its extent,
+    /// and in large segments those rarely pay (on the measured scenes the largest segment that
+    /// opened had 800 BRefs), while the estimate there costs a virtual build over all of
+    /// them. Bounds the estimate work per BRef (docs/design.md).
+    std::uint32_t estimate_max_brefs = 1024;
     /// OpeningRule::sah and overlap: when the build opened anything, also build the top
     /// without opening and keep whichever has the lower exact SAH cost
     /// (rebraid_cost_guard.h), so the rules never end above the unopened top. Costs one

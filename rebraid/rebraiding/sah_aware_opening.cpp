@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "rebraid/bvh/binned_split.h"
+#include "rebraid/bvh/build_box.h"
 #include "rebraid/top_level/bvh_stats.h"
 
 namespace rebraid {
@@ -25,6 +26,35 @@ constexpr std::size_t kParallelEstimateBoxes = 256;
 /// as large as the box (an overestimate that grows with the count).
 double unshrunk_cost(double area, std::size_t count) {
     return count <= 1 ? 0.0 : area * double(count - 1) / kChildrenPerNode;
+}
+
+/// How partition_measuring divided a range: boxes [0, left_count) went left.
+struct MeasuredPartition {
+    std::size_t left_count = 0;
+    RangeAccumulator left, right;
+};
+
+/// Moves the boxes `split` sends left to the front (in place, from both ends) and measures
+/// both sides on the way: one pass instead of a partition and a pass per side. The estimate
+/// reads only the sides' sets, so their order inside does not matter.
+MeasuredPartition partition_measuring(std::span<BuildPrim> boxes, const BinnedSplit& split) {
+    MeasuredPartition result;
+    std::size_t first = 0, last = boxes.size();
+    while (true) {
+        while (first != last && split.goes_left(boxes[first])) result.left.add(boxes[first++]);
+        if (first == last) break;
+        --last;
+        while (first != last && !split.goes_left(boxes[last])) result.right.add(boxes[last--]);
+        if (first == last) {
+            result.right.add(boxes[first]);  // boxes[first] goes right: the loop above said so
+            break;
+        }
+        std::swap(boxes[first], boxes[last]);
+        result.left.add(boxes[first++]);
+        result.right.add(boxes[last]);
+    }
+    result.left_count = first;
+    return result;
 }
 
 /// Estimated half-area cost of the top-level nodes over `boxes` (weights 1; reordered): the
@@ -60,13 +90,11 @@ double estimate_top_cost(std::span<BuildPrim> boxes, const RangeInfo& info,
             largest->can_split = false;
             continue;
         }
-        const auto middle = std::partition(largest->boxes.begin(), largest->boxes.end(),
-                                           [&](const BuildPrim& b) { return split.goes_left(b); });
-        const auto left_count = std::size_t(middle - largest->boxes.begin());
-        const std::span<BuildPrim> left = largest->boxes.first(left_count);
-        const std::span<BuildPrim> right = largest->boxes.subspan(left_count);
-        *largest = {left, compute_range_info(left, build.parallel_threshold), true};
-        groups[group_count++] = {right, compute_range_info(right, build.parallel_threshold), true};
+        const MeasuredPartition parts = partition_measuring(largest->boxes, split);
+        const std::span<BuildPrim> left = largest->boxes.first(parts.left_count);
+        const std::span<BuildPrim> right = largest->boxes.subspan(parts.left_count);
+        *largest = {left, parts.left.to_info(), true};
+        groups[group_count++] = {right, parts.right.to_info(), true};
     }
     // The groups' costs in parallel for large ranges, summed in group order either way.
     std::array<double, kBvhWidth> group_costs{};
@@ -86,7 +114,7 @@ double estimate_top_cost(std::span<BuildPrim> boxes, const RangeInfo& info,
 
 }  // namespace
 
-OpeningEstimate estimate_opening(std::span<const BuildPrim> prims,
+OpeningEstimate estimate_opening(std::span<const BuildPrim> prims, const RangeInfo& info,
                                  std::span<const BRefTarget> targets,
                                  const OpeningCriterion& criterion, const BRefSource& source,
                                  std::uint32_t free_space, const RebraidSettings& settings) {
@@ -95,6 +123,11 @@ OpeningEstimate estimate_opening(std::span<const BuildPrim> prims,
     std::vector<BuildPrim> closed(prims.size()), opened;
     opened.reserve(prims.size() + free_space);
     double closed_items = 0.0, opened_items = 0.0;  // only the BRefs that would open
+    RangeAccumulator opened_info;  // measured as the boxes go in: no pass of its own
+    auto add_opened = [&](const BuildPrim& box) {
+        opened.push_back(box);
+        opened_info.add(box);
+    };
     std::uint64_t offset = 0;
     bool is_full = false;
     for (std::size_t i = 0; i < prims.size(); ++i) {
@@ -121,24 +154,24 @@ OpeningEstimate estimate_opening(std::span<const BuildPrim> prims,
                             closed_items += mapped_box_half_area(box, to_world) * tests;
                         const double child_area = bounds.half_area();
                         opened_items += child_area * tests + entry_cost * child_area;
-                        opened.push_back({bounds, 0, 1});
+                        add_opened({bounds, 0, 1});
                     });
                 continue;
             }
         }
-        opened.push_back(closed[i]);
+        add_opened(closed[i]);
     }
     if (estimate.opened == 0) return estimate;
     const int levels = int(settings.estimate_levels);
     double closed_top = 0.0, opened_top = 0.0;
-    const std::size_t threshold = settings.build.parallel_threshold;
+    // The closed boxes are the segment's own, each of weight 1.
+    const RangeInfo closed_info{info.bounds, info.centroid_bounds, prims.size(),
+                                std::uint32_t(prims.size())};
     auto estimate_closed = [&] {
-        closed_top = estimate_top_cost(closed, compute_range_info(closed, threshold),
-                                       settings.build, levels);
+        closed_top = estimate_top_cost(closed, closed_info, settings.build, levels);
     };
     auto estimate_opened = [&] {
-        opened_top = estimate_top_cost(opened, compute_range_info(opened, threshold),
-                                       settings.build, levels);
+        opened_top = estimate_top_cost(opened, opened_info.to_info(), settings.build, levels);
     };
     if (prims.size() >= kParallelEstimateBoxes) {
         tbb::parallel_invoke(estimate_closed, estimate_opened);

@@ -38,8 +38,9 @@ struct OpeningEstimate {
 ///    instances, opened, regroup into smaller boxes, while opening separated instances only
 ///    adds nodes.
 /// `free_space`: what the segment may add; BRefs open in array order while it lasts, as in
-/// open_brefs. Large segments bin in parallel, deterministically.
-OpeningEstimate estimate_opening(std::span<const BuildPrim> prims,
+/// open_brefs. `info` is compute_range_info of `prims` (the builder has it at hand). Large
+/// segments bin in parallel, deterministically.
+OpeningEstimate estimate_opening(std::span<const BuildPrim> prims, const RangeInfo& info,
                                  std::span<const BRefTarget> targets,
                                  const OpeningCriterion& criterion, const BRefSource& source,
                                  std::uint32_t free_space, const RebraidSettings& settings);

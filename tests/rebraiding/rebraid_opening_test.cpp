@@ -51,6 +51,7 @@ std::vector<NamedSettings> new_rule_variants() {
         {"sah-open-everything",
          {.open_threshold = 0.0f, .budget_factor = 1000.0f, .opening_rule = OpeningRule::sah}},
         {"sah-entry-cost", {.opening_rule = OpeningRule::sah, .instance_entry_cost = 1.0f}},
+        {"sah-small-segments-only", {.opening_rule = OpeningRule::sah, .estimate_max_brefs = 16}},
         {"overlap", {.opening_rule = OpeningRule::overlap}},
         {"overlap-no-threshold",
          {.open_threshold = 0.0f,
@@ -200,6 +201,31 @@ TEST(RebraidOpening, SahRuleOpensWhereObjectsOverlap) {
             EXPECT_GT(build.brefs, named.scene.instances.size());
         }
     }
+}
+
+TEST(RebraidOpening, EstimateSizeLimitStopsOnlyLargerSegmentsFromOpening) {
+    // Crossing objects in world space, where the SAH rule opens (test above).
+    const Scene scene = generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    auto build_with_limit = [&](std::uint32_t limit) {
+        // Without the cost guard, which could hide what the rule opened.
+        return build_rebraid(scene, bvhs,
+                             {.opening_rule = OpeningRule::sah,
+                              .estimate_max_brefs = limit,
+                              .keep_cheaper_unopened = false});
+    };
+    auto hash_of = [&](RebraidBuild build) {
+        return *InstancedAccel(scene, bvhs, std::move(build.top), {}).stats().structure_hash;
+    };
+    // No segment may estimate: nothing opens, whatever the candidates.
+    const RebraidBuild none = build_with_limit(0);
+    EXPECT_EQ(none.opened, 0u);
+    EXPECT_EQ(none.brefs, scene.instances.size());
+    // Only segments of a few BRefs estimate: they still open some.
+    EXPECT_GT(build_with_limit(8).opened, 0u);
+    // A limit above every segment's size changes nothing: 80 instances and their budget of
+    // 320 make segments of at most 400 BRefs.
+    EXPECT_EQ(hash_of(build_with_limit(400)), hash_of(build_with_limit(1u << 30)));
 }
 
 /// The SAH: every structure over the same instances divides by the same scene box (docs/design.md,
