@@ -529,7 +529,7 @@ TEST(GltfSceneErrors, UnsupportedAccessors) {
     expect_load_error(sparse.write_glb("sparse.glb"), "sparse accessors not supported");
     GltfTestFile vec2 = valid_file();
     vec2.json["accessors"][0]["type"] = "VEC2";
-    expect_load_error(vec2.write_glb("vec2.glb"), "must be a float VEC3 accessor");
+    expect_load_error(vec2.write_glb("vec2.glb"), "must be a float, byte or short VEC3 accessor");
     GltfTestFile no_position = valid_file();
     no_position.json["meshes"][0]["primitives"][0]["attributes"] = {{"NORMAL", 0}};
     expect_load_error(no_position.write_glb("no_position.glb"), "no POSITION attribute");
