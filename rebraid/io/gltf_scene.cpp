@@ -14,7 +14,9 @@
 #include "rebraid/core/error.h"
 #include "rebraid/io/gltf_accessor.h"
 #include "rebraid/io/gltf_animation_math.h"
+#include "rebraid/io/gltf_draco.h"
 #include "rebraid/io/gltf_gpu_instancing.h"
+#include "rebraid/io/gltf_meshopt.h"
 
 namespace rebraid {
 namespace {
@@ -81,7 +83,7 @@ public:
 
     GltfLoadResult load() {
         parse_model(read_file());
-        check_required_extensions();
+        decode_gltf_meshopt_views(model_, error_prefix());
         for (std::size_t m = 0; m < model_.meshes.size(); ++m) load_mesh(m);
         add_scene_instances();
         try {
@@ -152,7 +154,7 @@ private:
                  std::to_string(bin_end) + ", file has " + std::to_string(declared_length) + ")");
     }
 
-    void parse_model(const std::vector<unsigned char>& bytes) {
+    void parse_model(std::vector<unsigned char> bytes) {
         tinygltf::TinyGLTF parser;
         parser.SetImageLoader(&skip_image_decoding, nullptr);
         const std::string base_dir = std::filesystem::path(path_).parent_path().string();
@@ -167,6 +169,7 @@ private:
             kMaxJsonNesting)
             fail("malformed glTF: JSON nested deeper than " + std::to_string(kMaxJsonNesting) +
                  " levels");
+        stub_gltf_meshopt_fallback_buffers(bytes, is_binary);
         if (is_binary) {
             ok = parser.LoadBinaryFromMemory(&model_, &error, &warning, bytes.data(),
                                              static_cast<unsigned int>(bytes.size()), base_dir);
@@ -178,13 +181,6 @@ private:
         while (!error.empty() && (error.back() == '\n' || error.back() == ' ')) error.pop_back();
         if (!ok)
             fail("malformed glTF: " + (error.empty() ? std::string("tinygltf failed") : error));
-    }
-
-    void check_required_extensions() const {
-        // These store geometry outside the plain accessors this loader reads.
-        for (const std::string& name : model_.extensionsRequired)
-            if (name == "KHR_draco_mesh_compression" || name == "EXT_meshopt_compression")
-                fail("requires extension " + name + ", which is not supported");
     }
 
     // ---- Accessors ---------------------------------------------------------------------------
@@ -306,6 +302,13 @@ private:
 
         const std::uint64_t base = mesh.positions.size();
         const std::uint64_t first_triangle = mesh.triangles.size();
+        if (uses_gltf_draco(primitive)) {
+            append_draco_primitive(primitive, where, mesh);
+            result_.report.mesh_primitives[m].push_back(
+                {std::uint32_t(p), base, mesh.positions.size() - base, first_triangle,
+                 mesh.triangles.size() - first_triangle, primitive.material});
+            return;
+        }
         const std::uint64_t vertex_count = append_positions(primitive, where, mesh);
         const IndexSource indices = index_source(primitive, where, vertex_count);
         const std::uint64_t n = indices.range.count;
@@ -338,6 +341,25 @@ private:
         result_.report.mesh_primitives[m].push_back({std::uint32_t(p), base, vertex_count,
                                                      first_triangle, triangle_count,
                                                      primitive.material});
+    }
+
+    /// A KHR_draco_mesh_compression primitive: decoded points, then faces in decoded order.
+    void append_draco_primitive(const tinygltf::Primitive& primitive, const std::string& where,
+                                Mesh& mesh) {
+        GltfDracoGeometry geometry = decode_gltf_draco_primitive(
+            model_, primitive, where, error_prefix(), options_.max_vertices - vertex_total_,
+            options_.max_triangles - triangle_total_);
+        if (mesh.positions.size() + geometry.positions.size() > kMaxMeshPositions)
+            fail(where + ": the mesh has more than 2^32-1 vertices");
+        vertex_total_ += geometry.positions.size();
+        triangle_total_ += geometry.triangles.size();
+        const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+        mesh.positions.insert(mesh.positions.end(), geometry.positions.begin(),
+                              geometry.positions.end());
+        for (Triangle& triangle : geometry.triangles)
+            for (std::uint32_t& vertex : triangle) vertex += base;
+        mesh.triangles.insert(mesh.triangles.end(), geometry.triangles.begin(),
+                              geometry.triangles.end());
     }
 
     void load_mesh(std::size_t m) {
