@@ -3,11 +3,8 @@
 #include <meshoptimizer.h>
 #include <tiny_gltf.h>
 
-#include <algorithm>
 #include <cstdint>
-#include <cstring>
 #include <limits>
-#include <nlohmann/json.hpp>
 
 #include "rebraid/core/error.h"
 #include "rebraid/io/gltf_accessor.h"
@@ -138,60 +135,7 @@ private:
     std::string label_;
 };
 
-std::uint32_t read_u32(const std::vector<unsigned char>& bytes, std::size_t at) {
-    std::uint32_t value;
-    std::memcpy(&value, bytes.data() + at, sizeof value);  // GLB is little-endian, as the host
-    return value;
-}
-
-void write_u32(std::vector<unsigned char>& bytes, std::size_t at, std::uint32_t value) {
-    std::memcpy(bytes.data() + at, &value, sizeof value);
-}
-
 }  // namespace
-
-bool stub_gltf_meshopt_fallback_buffers(std::vector<unsigned char>& bytes, bool is_binary) {
-    // GLB: 12-byte header, then the JSON chunk (length, type, text); its layout was checked.
-    const std::size_t json_begin = is_binary ? 20 : 0;
-    if (bytes.size() < json_begin) return false;
-    const std::size_t json_size = is_binary ? read_u32(bytes, 12) : bytes.size();
-    const auto json_first = bytes.begin() + std::ptrdiff_t(json_begin);
-    const auto json_last = json_first + std::ptrdiff_t(json_size);
-    const std::string marker = kGltfMeshoptCompression;
-    if (std::search(json_first, json_last, marker.begin(), marker.end()) == json_last) return false;
-    nlohmann::json document = nlohmann::json::parse(json_first, json_last, nullptr, false);
-    if (document.is_discarded() || !document.is_object() || !document.contains("buffers") ||
-        !document["buffers"].is_array())
-        return false;
-    bool changed = false;
-    for (nlohmann::json& buffer : document["buffers"]) {
-        if (!buffer.is_object() || buffer.contains("uri")) continue;
-        const nlohmann::json* extension = nullptr;
-        if (buffer.contains("extensions") && buffer["extensions"].is_object() &&
-            buffer["extensions"].contains(marker))
-            extension = &buffer["extensions"][marker];
-        if (!extension || !extension->is_object() || !extension->contains("fallback") ||
-            (*extension)["fallback"] != true)
-            continue;
-        buffer["uri"] = "data:application/octet-stream;base64,AAAA";  // three zero bytes
-        buffer["byteLength"] = 3;
-        changed = true;
-    }
-    if (!changed) return false;
-    std::string text = document.dump();
-    if (!is_binary) {
-        bytes.assign(text.begin(), text.end());
-        return true;
-    }
-    text.resize((text.size() + 3) / 4 * 4, ' ');
-    std::vector<unsigned char> rebuilt(bytes.begin(), bytes.begin() + 20);
-    rebuilt.insert(rebuilt.end(), text.begin(), text.end());
-    rebuilt.insert(rebuilt.end(), json_last, bytes.end());  // the BIN chunk, if any
-    write_u32(rebuilt, 8, std::uint32_t(rebuilt.size()));
-    write_u32(rebuilt, 12, std::uint32_t(text.size()));
-    bytes = std::move(rebuilt);
-    return true;
-}
 
 void decode_gltf_meshopt_views(tinygltf::Model& model, const std::string& error_prefix) {
     for (std::size_t v = 0; v < model.bufferViews.size(); ++v)

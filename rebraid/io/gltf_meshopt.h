@@ -4,7 +4,6 @@
 // compressed by meshoptimizer's vertex or index codec.
 
 #include <string>
-#include <vector>
 
 namespace tinygltf {
 class Model;
@@ -23,14 +22,5 @@ inline constexpr const char* kGltfMeshoptCompression = "EXT_meshopt_compression"
 /// extension, a compressed range past its buffer, a stride or count the mode does not allow,
 /// or data the codec rejects.
 void decode_gltf_meshopt_views(tinygltf::Model& model, const std::string& error_prefix);
-
-/// tinygltf 2.7 cannot load a buffer that EXT_meshopt_compression marks as a fallback (no
-/// `uri`, no data: readers that decode never need its bytes). Gives every such buffer a
-/// 3-byte embedded stand-in in the file's JSON so tinygltf accepts it; a bufferView that
-/// reads the fallback without being compressed then fails the loader's range check. `bytes`
-/// is the whole file, a GLB when `is_binary` (its BIN chunk is kept). Returns false and
-/// leaves `bytes` alone when there is no such buffer or the JSON does not parse (tinygltf
-/// then reports the problem).
-bool stub_gltf_meshopt_fallback_buffers(std::vector<unsigned char>& bytes, bool is_binary);
 
 }  // namespace rebraid

@@ -17,6 +17,7 @@
 #include "rebraid/io/gltf_draco.h"
 #include "rebraid/io/gltf_gpu_instancing.h"
 #include "rebraid/io/gltf_meshopt.h"
+#include "rebraid/io/gltf_tinygltf_fixups.h"
 
 namespace rebraid {
 namespace {
@@ -169,7 +170,7 @@ private:
             kMaxJsonNesting)
             fail("malformed glTF: JSON nested deeper than " + std::to_string(kMaxJsonNesting) +
                  " levels");
-        stub_gltf_meshopt_fallback_buffers(bytes, is_binary);
+        const GltfJsonFixes fixes = fix_gltf_json_for_tinygltf(bytes, is_binary);
         if (is_binary) {
             ok = parser.LoadBinaryFromMemory(&model_, &error, &warning, bytes.data(),
                                              static_cast<unsigned int>(bytes.size()), base_dir);
@@ -181,6 +182,7 @@ private:
         while (!error.empty() && (error.back() == '\n' || error.back() == ' ')) error.pop_back();
         if (!ok)
             fail("malformed glTF: " + (error.empty() ? std::string("tinygltf failed") : error));
+        undo_gltf_json_fixes(fixes, model_);
     }
 
     // ---- Accessors ---------------------------------------------------------------------------
