@@ -68,7 +68,11 @@ void give_draco_indices_a_view(json& document, GltfJsonFixes& fixes) {
                 continue;
             json& accessor = (*accessors)[indices->get<std::size_t>()];
             if (!accessor.is_object() || accessor.contains("bufferView")) continue;
-            accessor["bufferView"] = *view;
+            // Any valid view passes tinygltf; an invalid Draco one is reported by the decoder.
+            const json* views = member(document, "bufferViews");
+            const std::size_t view_count = views && views->is_array() ? views->size() : 0;
+            if (view_count == 0) continue;
+            accessor["bufferView"] = view->get<std::uint64_t>() < view_count ? *view : json(0);
             fixes.accessors_without_view.push_back(indices->get<int>());
         }
     }

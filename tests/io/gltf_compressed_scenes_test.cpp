@@ -7,15 +7,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "embree_glue/reference/embree_reference.h"
+#include "rebraid/core/error.h"
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/rebraiding/rebraid_builder.h"
 #include "rebraid/top_level/instanced_accel.h"
+#include "support/gltf_test_files.h"
 #include "support/hit_comparison.h"
 #include "support/test_rays.h"
 
@@ -111,6 +116,102 @@ INSTANTIATE_TEST_SUITE_P(Assets, GltfCompressedCopy, testing::ValuesIn(kCopies),
                          [](const testing::TestParamInfo<CompressedCopy>& info) {
                              return test::test_name_of(info.param.copy);
                          });
+
+// ---- Broken compressed files ------------------------------------------------------------------
+
+/// An asset opened for editing: its JSON and BIN chunk.
+test::GltfTestFile open_asset(const std::string& name) {
+    std::ifstream in(std::string(REBRAID_SOURCE_DIR) + "/tests/io/assets/" + name,
+                     std::ios::binary);
+    const std::vector<unsigned char> bytes{std::istreambuf_iterator<char>(in),
+                                           std::istreambuf_iterator<char>()};
+    std::uint32_t json_length = 0, bin_length = 0;
+    std::memcpy(&json_length, bytes.data() + 12, 4);
+    std::memcpy(&bin_length, bytes.data() + 20 + json_length, 4);
+    test::GltfTestFile file;
+    file.json = nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_length);
+    const auto bin = bytes.begin() + 28 + json_length;
+    file.bin.assign(bin, bin + bin_length);
+    return file;
+}
+
+using Breakage = std::function<void(test::GltfTestFile&)>;
+
+void expect_each_breakage_fails(const std::string& asset,
+                                const std::vector<std::pair<std::string, Breakage>>& cases) {
+    for (const auto& [phrase, breakage] : cases) {
+        SCOPED_TRACE(phrase);
+        test::GltfTestFile file = open_asset(asset);
+        breakage(file);
+        const std::string path = file.write_glb("broken_" + asset);
+        try {
+            load_gltf_scene(path);
+            ADD_FAILURE() << "no error loading " << path;
+        } catch (const Error& error) {
+            EXPECT_NE(std::string(error.what()).find(phrase), std::string::npos) << error.what();
+        }
+    }
+}
+
+TEST(GltfCompressedErrors, BrokenDracoData) {
+    const char* draco = "KHR_draco_mesh_compression";
+    auto extension = [draco](test::GltfTestFile& f) -> nlohmann::json& {
+        return f.json["meshes"][0]["primitives"][0]["extensions"][draco];
+    };
+    expect_each_breakage_fails(
+        "chinese_dragon_draco.glb",
+        {{"corrupt Draco data",
+          [](test::GltfTestFile& f) { std::fill(f.bin.begin(), f.bin.begin() + 64, 0); }},
+         {"corrupt Draco data",
+          [](test::GltfTestFile& f) { f.json["bufferViews"][0]["byteLength"] = 300; }},
+         {"accessors say 9999 and 19994",
+          [](test::GltfTestFile& f) { f.json["accessors"][1]["count"] = 9999; }},
+         {"references bufferView 9",
+          [&](test::GltfTestFile& f) { extension(f)["bufferView"] = 9; }},
+         {"has no attribute 4",
+          [&](test::GltfTestFile& f) { extension(f)["attributes"]["POSITION"] = 4; }},
+         {"needs the Draco attribute id of POSITION",
+          [&](test::GltfTestFile& f) {
+              extension(f)["attributes"] = {{"NORMAL", 0}};
+          }},
+         {"only mode TRIANGLES",
+          [](test::GltfTestFile& f) { f.json["meshes"][0]["primitives"][0]["mode"] = 5; }},
+         {"more than max_vertices",
+          [](test::GltfTestFile& f) { f.json["accessors"][1]["count"] = 4'000'000'000u; }}});
+}
+
+TEST(GltfCompressedErrors, BrokenMeshoptData) {
+    const char* meshopt = "EXT_meshopt_compression";
+    auto view = [meshopt](test::GltfTestFile& f, int v) -> nlohmann::json& {
+        return f.json["bufferViews"][v]["extensions"][meshopt];
+    };
+    expect_each_breakage_fails(
+        "chinese_dragon_meshopt.glb",
+        {{"the ATTRIBUTES data is corrupt",
+          [](test::GltfTestFile& f) {
+              std::fill(f.bin.begin() + 23508, f.bin.begin() + 23508 + 64, 0xFF);
+          }},
+         {"the TRIANGLES data is corrupt",
+          [&](test::GltfTestFile& f) { view(f, 0)["byteLength"] = 20000; }},
+         {"claims 1000000000 elements",
+          [&](test::GltfTestFile& f) { view(f, 1)["count"] = 1'000'000'000; }},
+         {"unknown mode 'POINTS'", [&](test::GltfTestFile& f) { view(f, 1)["mode"] = "POINTS"; }},
+         {"multiple of 4", [&](test::GltfTestFile& f) { view(f, 1)["byteStride"] = 6; }},
+         {"filter QUATERNION needs byteStride 8",
+          [&](test::GltfTestFile& f) {
+              view(f, 1)["byteStride"] = 12;
+              view(f, 1)["filter"] = "QUATERNION";
+          }},
+         {"needs mode ATTRIBUTES",
+          [&](test::GltfTestFile& f) { view(f, 0)["filter"] = "EXPONENTIAL"; }},
+         {"references buffer 7", [&](test::GltfTestFile& f) { view(f, 1)["buffer"] = 7; }},
+         {"runs past the end of buffer 0",
+          [&](test::GltfTestFile& f) { view(f, 1)["byteOffset"] = 1'000'000; }},
+         {"not a whole number", [&](test::GltfTestFile& f) { view(f, 1)["count"] = -3; }},
+         // A view that reads the fallback buffer without being compressed.
+         {"runs past the end of buffer 1",
+          [](test::GltfTestFile& f) { f.json["bufferViews"][1].erase("extensions"); }}});
+}
 
 }  // namespace
 }  // namespace rebraid
