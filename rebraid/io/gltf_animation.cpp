@@ -71,6 +71,7 @@ struct GltfAnimator::Data {
 
     std::vector<MeshId> deformed_meshes;
     std::vector<InstanceId> moving_instances;
+    MeshId hidden_mesh = kNoHiddenMesh;  ///< the loader's empty mesh of hidden instances
     /// Per moving instance, its EXT_mesh_gpu_instancing element's T * R * S below its node
     /// (the identity for an instance of a node without the extension).
     std::vector<Affine3d> moving_element_transforms;
@@ -154,9 +155,13 @@ private:
         if (instance_nodes.size() != scene.instances.size())
             fail("the load report lists " + std::to_string(instance_nodes.size()) +
                  " instance nodes for " + std::to_string(scene.instances.size()) + " instances");
-        if (scene.meshes.size() != model_.meshes.size())
+        // The loader appends one empty mesh for hidden instances.
+        const bool has_hidden_mesh = loaded_.report.hidden_mesh != kNoHiddenMesh;
+        if (scene.meshes.size() != model_.meshes.size() + (has_hidden_mesh ? 1 : 0))
             fail("the scene has " + std::to_string(scene.meshes.size()) + " meshes, the model " +
                  std::to_string(model_.meshes.size()));
+        data_.hidden_mesh = loaded_.report.hidden_mesh;
+        mesh_target_counts_.resize(scene.meshes.size(), 0);
         data_.instance_nodes = instance_nodes;
         data_.loaded_mesh_count = scene.meshes.size();
         data_.instance_is_skinned.assign(scene.instances.size(), false);
@@ -164,7 +169,8 @@ private:
             const MeshId mesh = scene.instances[i].mesh_id;
             data_.loaded_mesh_ids.push_back(mesh);
             const tinygltf::Node& node = model_.nodes[instance_nodes[i]];
-            const bool is_skinned = node.skin >= 0;
+            // A hidden instance stays hidden: its empty mesh is never skinned or morphed.
+            const bool is_skinned = node.skin >= 0 && mesh != data_.hidden_mesh;
             data_.instance_is_skinned[i] = is_skinned;
             if (!is_skinned && mesh_target_counts_[mesh] == 0) continue;
             DeformingInstance instance;
@@ -482,8 +488,12 @@ void GltfAnimator::apply(float time, Scene& scene) const {
 
     for (std::size_t k = 0; k < data.moving_instances.size(); ++k) {
         const InstanceId i = data.moving_instances[k];
-        scene.instances[i].object_to_world =
+        AffineTransform& transform = scene.instances[i].object_to_world;
+        transform =
             (pose.world[data.instance_nodes[i]] * data.moving_element_transforms[k]).to_float();
+        // A hidden instance draws nothing, whatever its pose; the scene needs an invertible map.
+        if (data.mesh_ids[i] == data.hidden_mesh && !(std::fabs(transform.determinant()) >= 1e-30f))
+            transform = AffineTransform::identity();
     }
     for (InstanceId i = 0; i < scene.instances.size(); ++i)
         if (data.instance_is_skinned[i])  // glTF: the skinned node's own transform is ignored

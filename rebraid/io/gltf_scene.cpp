@@ -464,19 +464,33 @@ private:
                  node_label(n) +
                  (element == kNotGpuInstanced ? "" : " element " + std::to_string(element)) +
                  ") has a non-finite transform");
-        // A zero scale is how exporters hide an object: a singular instance is left out.
-        const float determinant = object_to_world.determinant();
-        if (!(std::fabs(determinant) >= kMinDeterminant)) {
-            ++result_.report.hidden_instance_count;
-            return;
-        }
         if (result_.scene.instances.size() >= options_.max_instances)
             fail("more than max_instances = " + std::to_string(options_.max_instances) +
                  " instances");
-        result_.scene.instances.push_back({MeshId(node.mesh), object_to_world});
+        // A zero scale is how exporters hide an object: such an instance keeps its number
+        // but draws the empty hidden mesh (a singular map has no inverse to trace with).
+        const float determinant = object_to_world.determinant();
+        if (!(std::fabs(determinant) >= kMinDeterminant)) {
+            result_.report.hidden_instances.push_back(
+                std::uint32_t(result_.scene.instances.size()));
+            result_.scene.instances.push_back({hidden_mesh(), AffineTransform::identity()});
+        } else {
+            result_.scene.instances.push_back({MeshId(node.mesh), object_to_world});
+        }
         result_.report.instance_node_ids.push_back(std::uint32_t(n));
         result_.report.instance_gpu_elements.push_back(element);
         if (node.skin >= 0) ++result_.report.skinned_instance_count;
+    }
+
+    /// The empty Mesh that hidden instances use, appended on first use.
+    MeshId hidden_mesh() {
+        if (result_.report.hidden_mesh == kNoHiddenMesh) {
+            result_.report.hidden_mesh = std::uint32_t(result_.scene.meshes.size());
+            Mesh empty;
+            empty.name = "hidden";
+            result_.scene.meshes.push_back(std::move(empty));
+        }
+        return result_.report.hidden_mesh;
     }
 
     void add_scene_instances() {
@@ -532,9 +546,6 @@ private:
                 enter(check_node_id(child, node_label(parent)), parent_world, parent);
             }
         }
-        if (result_.scene.instances.empty() && result_.report.hidden_instance_count > 0)
-            fail("empty scene: every instance of " + scene_label +
-                 " is hidden (has a singular transform)");
         if (result_.scene.instances.empty())
             fail("empty scene: no node of " + scene_label + " references a mesh");
     }

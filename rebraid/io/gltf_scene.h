@@ -47,6 +47,8 @@ struct GltfPrimitiveRange {
 /// GltfLoadReport::instance_gpu_elements of an instance of a node without
 /// EXT_mesh_gpu_instancing.
 inline constexpr std::uint32_t kNotGpuInstanced = 0xFFFFFFFFu;
+/// GltfLoadReport::hidden_mesh of a scene without hidden instances.
+inline constexpr std::uint32_t kNoHiddenMesh = 0xFFFFFFFFu;
 
 /// What the loader saw besides the scene: useful for tools that explain a file and for the
 /// animation loader, which needs to know which glTF node each instance came from.
@@ -60,9 +62,13 @@ struct GltfLoadReport {
     /// Per instance, its element in its node's EXT_mesh_gpu_instancing accessors, or
     /// kNotGpuInstanced for a node without the extension.
     std::vector<std::uint32_t> instance_gpu_elements;
-    /// Instances left out because their transform is singular (|determinant| < 1e-30, e.g. a
-    /// zero scale, which exporters use to hide objects); they take no instance number.
-    std::uint64_t hidden_instance_count = 0;
+    /// Instances whose transform is singular (|determinant| < 1e-30, e.g. a zero scale,
+    /// which exporters use to hide objects), ascending. Each keeps its number but is placed
+    /// as an identity instance of hidden_mesh, which has no triangles: it is never hit.
+    std::vector<std::uint32_t> hidden_instances;
+    /// The empty Mesh of hidden instances, appended after the file's meshes; kNoHiddenMesh
+    /// when no instance is hidden.
+    std::uint32_t hidden_mesh = kNoHiddenMesh;
     /// Per Mesh (index = MeshId = glTF mesh index), its loaded primitives in order (points
     /// and lines, which are skipped, have no entry).
     std::vector<std::vector<GltfPrimitiveRange>> mesh_primitives;

@@ -232,31 +232,60 @@ TEST(GltfGpuInstancingErrors, InstanceLimit) {
 
 // ---- Hidden (singular) instances --------------------------------------------------------------
 
-TEST(GltfHiddenInstances, ZeroScaleNodesAndElementsAreLeftOut) {
+TEST(GltfHiddenInstances, ZeroScaleInstancesKeepTheirNumberAndAreNeverHit) {
     GltfTestFile file = triangle_file();
     const int scale = add_values<float>(file, {1, 1, 1, 0, 0, 0, 2, 2, 2}, test::kFloat, 3, "VEC3");
     file.add_node({{"mesh", 0}, {"scale", {0, 0, 0}}, {"translation", {0, 0, 5}}});
     file.add_node({{"mesh", 0}, {"extensions", instancing({{"SCALE", scale}})}});
-    file.add_node({{"mesh", 0}, {"scale", {1, 0, 1}}});
+    file.add_node({{"mesh", 0}, {"scale", {1, 0, 1}}, {"translation", {0, 0, 5}}});
     file.add_scene({0, 1, 2});
     const GltfLoadResult loaded = load_gltf_scene_with_report(file.write_glb("hidden.glb"));
-    EXPECT_EQ(loaded.report.hidden_instance_count, 3u);
-    ASSERT_EQ(loaded.scene.instances.size(), 2u);
-    EXPECT_EQ(loaded.report.instance_gpu_elements, (std::vector<std::uint32_t>{0, 2}));
-    // Embree on the loaded scene: the hidden triangle at z = 5 is never hit.
-    const glue::EmbreeFlatAccel embree(loaded.scene);
-    const Hit hidden = embree.intersect({{0.2f, 0.2f, 10}, 0, {0, 0, -1}, 7});
-    EXPECT_FALSE(hidden.is_hit());
+    const Scene& scene = loaded.scene;
+    ASSERT_EQ(scene.instances.size(), 5u);
+    EXPECT_EQ(loaded.report.hidden_instances, (std::vector<std::uint32_t>{0, 2, 4}));
+    EXPECT_EQ(loaded.report.instance_node_ids, (std::vector<std::uint32_t>{0, 1, 1, 1, 2}));
+    ASSERT_EQ(loaded.report.hidden_mesh, 1u);
+    ASSERT_EQ(scene.meshes.size(), 2u);
+    EXPECT_TRUE(scene.meshes[1].triangles.empty());
+    for (std::uint32_t i : loaded.report.hidden_instances) {
+        EXPECT_EQ(scene.instances[i].mesh_id, 1u);
+        EXPECT_TRUE(scene.instances[i].object_to_world == AffineTransform::identity());
+    }
+    EXPECT_EQ(scene.instances[3].mesh_id, 0u);
+    // Embree on the loaded scene: nothing at z = 5 (the hidden nodes); instance 1 at z = 0.
+    const glue::EmbreeFlatAccel embree(scene);
+    EXPECT_FALSE(embree.intersect({{0.2f, 0.2f, 10}, 0, {0, 0, -1}, 7}).is_hit());
     const Hit shown = embree.intersect({{0.2f, 0.2f, 10}, 0, {0, 0, -1}, 100});
     ASSERT_TRUE(shown.is_hit());
     EXPECT_FLOAT_EQ(shown.t, 10);
+    EXPECT_TRUE(shown.instance_id == 1 || shown.instance_id == 3);  // coplanar, both at z = 0
 }
 
-TEST(GltfHiddenInstances, OnlyHiddenInstancesIsAnEmptyScene) {
+TEST(GltfHiddenInstances, HiddenInstancesStayHiddenWhenAnimated) {
     GltfTestFile file = triangle_file();
     file.add_node({{"mesh", 0}, {"scale", {0, 0, 0}}});
-    file.add_scene({0});
-    expect_load_error(file.write_glb("all_hidden.glb"), "every instance of scene 0 is hidden");
+    file.add_node({{"mesh", 0}});
+    file.add_scene({0, 1});
+    // Node 0 grows from scale 0 to 1, node 1 moves along z.
+    const int times = add_values<float>(file, {0, 1}, test::kFloat, 2, "SCALAR");
+    const int scales = add_values<float>(file, {0, 0, 0, 1, 1, 1}, test::kFloat, 2, "VEC3");
+    const int moves = add_values<float>(file, {0, 0, 0, 0, 0, 8}, test::kFloat, 2, "VEC3");
+    file.json["animations"] = {
+        {{"samplers",
+          {{{"input", times}, {"output", scales}}, {{"input", times}, {"output", moves}}}},
+         {"channels",
+          {{{"sampler", 0}, {"target", {{"node", 0}, {"path", "scale"}}}},
+           {{"sampler", 1}, {"target", {{"node", 1}, {"path", "translation"}}}}}}}};
+    const GltfLoadResult loaded =
+        load_gltf_scene_with_report(file.write_glb("hidden_animated.glb"), {.keep_model = true});
+    const GltfAnimator animator(loaded);
+    for (const float time : {0.0f, 0.5f}) {
+        Scene scene = loaded.scene;
+        animator.apply(time, scene);
+        EXPECT_NO_THROW(scene.validate());
+        EXPECT_EQ(scene.instances[0].mesh_id, loaded.report.hidden_mesh);
+        expect_near(scene.instances[1].object_to_world.translation, {0, 0, 8 * time});
+    }
 }
 
 // ---- KHR_mesh_quantization positions ----------------------------------------------------------
