@@ -17,3 +17,13 @@ gltf-transform draco "$scenes/chinese_dragon.glb" chinese_dragon_draco.glb
 # (the instanced file alone is 780 KB).
 gltf-transform instance "$scenes/fzk_haus.glb" "$work/fzk_haus_instanced.glb"
 gltf-transform meshopt "$work/fzk_haus_instanced.glb" fzk_haus_instanced_meshopt.glb
+
+# Fuzz seeds for the same paths (tests/fuzz/make_gltf_seeds.py keeps them): copies of shrunk
+# shared-scene seeds, small enough for fuzz.sh's -max_len.
+seeds=../../fuzz/seeds/gltf_loader
+gltf-transform instance --min 2 "$seeds/scene_two_cylinder_engine.glb" \
+    "$seeds/tool_two_cylinder_engine_instanced.glb"
+gltf-transform meshopt "$seeds/tool_two_cylinder_engine_instanced.glb" \
+    "$seeds/tool_two_cylinder_engine_instanced_meshopt.glb"
+gltf-transform draco "$seeds/scene_fzk_haus.glb" "$seeds/tool_fzk_haus_draco.glb"
+gltf-transform quantize "$seeds/scene_fzk_haus.glb" "$seeds/tool_fzk_haus_quantized.glb"
