@@ -230,6 +230,35 @@ TEST(GltfGpuInstancingErrors, InstanceLimit) {
     }
 }
 
+TEST(GltfGpuInstancing, WriterRunsKeepOrderMirrorsAndShears) {
+    Scene scene;
+    scene.meshes.push_back({"tri", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}});
+    const AffineTransform turned =
+        AffineTransform::translate({1, 2, 3}) * AffineTransform::rotate({1, 1, 0}, 0.7f);
+    const AffineTransform mirrored =
+        AffineTransform::rotate({0, 0, 1}, 2.0f) * AffineTransform::scale({-1, 2, 0.5f});
+    const AffineTransform sheared{{1, 0, 0}, {0.5f, 1, 0}, {0, 0, 1}, {4, 0, 0}};
+    for (const AffineTransform& t : {turned, mirrored, sheared, turned, mirrored, turned})
+        scene.instances.push_back({0, t});
+    const std::string path = test::scratch_path("writer_runs.gltf");
+    write_gltf_scene(scene, path, {.gpu_instancing = true});
+    const GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
+    // Nodes: instanced (turned, mirrored), matrix (sheared), instanced (the last three).
+    ASSERT_EQ(loaded.model->nodes.size(), 3u);
+    EXPECT_FALSE(loaded.model->nodes[1].matrix.empty());
+    EXPECT_EQ(loaded.report.instance_gpu_elements,
+              (std::vector<std::uint32_t>{0, 1, kNotGpuInstanced, 0, 1, 2}));
+    ASSERT_EQ(loaded.scene.instances.size(), scene.instances.size());
+    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+        const AffineTransform& a = scene.instances[i].object_to_world;
+        const AffineTransform& b = loaded.scene.instances[i].object_to_world;
+        expect_near(b.col_x, a.col_x, 1e-6f);
+        expect_near(b.col_y, a.col_y, 1e-6f);
+        expect_near(b.col_z, a.col_z, 1e-6f);
+        expect_near(b.translation, a.translation, 0);
+    }
+}
+
 // ---- Hidden (singular) instances --------------------------------------------------------------
 
 TEST(GltfHiddenInstances, ZeroScaleInstancesKeepTheirNumberAndAreNeverHit) {
