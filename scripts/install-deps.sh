@@ -5,6 +5,7 @@ set -euo pipefail
 packages=(
     cmake ninja-build g++ pkg-config
     libembree-dev libtbb-dev libopenimageio-dev openimageio-tools libtinygltf-dev nlohmann-json3-dev
+    libdraco-dev libmeshoptimizer-dev
     libcli11-dev libgtest-dev libbenchmark-dev
     python3 python3-matplotlib
 )

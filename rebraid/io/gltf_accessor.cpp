@@ -1,5 +1,10 @@
 #include "rebraid/io/gltf_accessor.h"
 
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+
 #include "rebraid/core/error.h"
 
 namespace rebraid {
@@ -52,6 +57,41 @@ GltfElementRange resolve_gltf_accessor(const tinygltf::Model& model, int id,
              " runs past the end of " + view_label + " (" + std::to_string(view.byteLength) +
              " bytes)");
     return {buffer.data() + view.byteOffset + accessor.byteOffset, accessor.count, stride};
+}
+
+namespace {
+
+/// The `k`-th value of type T at `element`, and its normalized value when `normalized`.
+template <typename T>
+double component_value(const unsigned char* element, bool normalized, int k) {
+    T value;
+    std::memcpy(&value, element + k * sizeof(T), sizeof value);
+    if constexpr (std::is_floating_point_v<T>) {
+        return value;
+    } else {
+        if (!normalized) return double(value);
+        return std::max(double(value) / double(std::numeric_limits<T>::max()), -1.0);
+    }
+}
+
+}  // namespace
+
+double read_gltf_component(const unsigned char* element, int component_type, bool normalized,
+                           int k) {
+    switch (component_type) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE:
+            return component_value<std::int8_t>(element, normalized, k);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+            return component_value<std::uint8_t>(element, normalized, k);
+        case TINYGLTF_COMPONENT_TYPE_SHORT:
+            return component_value<std::int16_t>(element, normalized, k);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+            return component_value<std::uint16_t>(element, normalized, k);
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+            return component_value<std::uint32_t>(element, normalized, k);
+        default:
+            return component_value<float>(element, normalized, k);
+    }
 }
 
 }  // namespace rebraid

@@ -28,4 +28,11 @@ bool gltf_elements_fit(std::uint64_t offset, std::uint64_t count, std::uint64_t 
 GltfElementRange resolve_gltf_accessor(const tinygltf::Model& model, int id,
                                        const std::string& role, const std::string& error_prefix);
 
+/// Component `k` of the element at `element` as a number: floats as stored, integers as
+/// stored or, when `normalized`, mapped to [0, 1] (unsigned) or [-1, 1] (signed, the most
+/// negative value clamped to -1), as the glTF 2.0 specification ("Accessors") defines.
+/// `component_type` must be one of glTF's six component types.
+double read_gltf_component(const unsigned char* element, int component_type, bool normalized,
+                           int k);
+
 }  // namespace rebraid

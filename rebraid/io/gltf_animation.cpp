@@ -8,11 +8,13 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 
 #include "rebraid/core/error.h"
 #include "rebraid/io/gltf_animation_channels.h"
 #include "rebraid/io/gltf_animation_math.h"
 #include "rebraid/io/gltf_animation_nodes.h"
+#include "rebraid/io/gltf_gpu_instancing.h"
 #include "rebraid/io/gltf_morph.h"
 #include "rebraid/io/gltf_skinning.h"
 
@@ -69,6 +71,10 @@ struct GltfAnimator::Data {
 
     std::vector<MeshId> deformed_meshes;
     std::vector<InstanceId> moving_instances;
+    MeshId hidden_mesh = kNoHiddenMesh;  ///< the loader's empty mesh of hidden instances
+    /// Per moving instance, its EXT_mesh_gpu_instancing element's T * R * S below its node
+    /// (the identity for an instance of a node without the extension).
+    std::vector<Affine3d> moving_element_transforms;
 };
 
 void GltfAnimationSettings::validate() const {
@@ -149,9 +155,13 @@ private:
         if (instance_nodes.size() != scene.instances.size())
             fail("the load report lists " + std::to_string(instance_nodes.size()) +
                  " instance nodes for " + std::to_string(scene.instances.size()) + " instances");
-        if (scene.meshes.size() != model_.meshes.size())
+        // The loader appends one empty mesh for hidden instances.
+        const bool has_hidden_mesh = loaded_.report.hidden_mesh != kNoHiddenMesh;
+        if (scene.meshes.size() != model_.meshes.size() + (has_hidden_mesh ? 1 : 0))
             fail("the scene has " + std::to_string(scene.meshes.size()) + " meshes, the model " +
                  std::to_string(model_.meshes.size()));
+        data_.hidden_mesh = loaded_.report.hidden_mesh;
+        mesh_target_counts_.resize(scene.meshes.size(), 0);
         data_.instance_nodes = instance_nodes;
         data_.loaded_mesh_count = scene.meshes.size();
         data_.instance_is_skinned.assign(scene.instances.size(), false);
@@ -159,7 +169,8 @@ private:
             const MeshId mesh = scene.instances[i].mesh_id;
             data_.loaded_mesh_ids.push_back(mesh);
             const tinygltf::Node& node = model_.nodes[instance_nodes[i]];
-            const bool is_skinned = node.skin >= 0;
+            // A hidden instance stays hidden: its empty mesh is never skinned or morphed.
+            const bool is_skinned = node.skin >= 0 && mesh != data_.hidden_mesh;
             data_.instance_is_skinned[i] = is_skinned;
             if (!is_skinned && mesh_target_counts_[mesh] == 0) continue;
             DeformingInstance instance;
@@ -250,12 +261,33 @@ private:
         }
     }
 
+    /// T * R * S of instance i's EXT_mesh_gpu_instancing element; the identity without one.
+    Affine3d element_transform(InstanceId i) {
+        const std::vector<std::uint32_t>& elements = loaded_.report.instance_gpu_elements;
+        if (elements.size() != data_.instance_nodes.size())
+            fail("the load report lists " + std::to_string(elements.size()) +
+                 " instance elements for " + std::to_string(data_.instance_nodes.size()) +
+                 " instances");
+        if (elements[i] == kNotGpuInstanced) return {};
+        const std::uint32_t node = data_.instance_nodes[i];
+        auto [found, is_new] = gpu_instancing_of_node_.try_emplace(node);
+        if (is_new)
+            found->second = std::make_unique<GltfGpuInstancing>(model_, node, data_.error_prefix);
+        if (elements[i] >= found->second->count())
+            fail("instance " + std::to_string(i) + " names element " + std::to_string(elements[i]) +
+                 " of node " + std::to_string(node) + ", which has " +
+                 std::to_string(found->second->count()));
+        return found->second->element(elements[i]);
+    }
+
     void collect_changing_parts() {
         std::vector<bool> is_dynamic(data_.nodes.node_count(), false);
         for (std::uint32_t n : data_.dynamic_nodes) is_dynamic[n] = true;
         for (InstanceId i = 0; i < data_.instance_nodes.size(); ++i)
-            if (is_dynamic[data_.instance_nodes[i]] && !data_.instance_is_skinned[i])
+            if (is_dynamic[data_.instance_nodes[i]] && !data_.instance_is_skinned[i]) {
                 data_.moving_instances.push_back(i);
+                data_.moving_element_transforms.push_back(element_transform(i));
+            }
         for (const DeformingInstance& instance : data_.deforming) {
             bool changes = instance.weight_slot != kNone;
             if (instance.skin != kNone) {
@@ -275,6 +307,7 @@ private:
     std::vector<std::size_t> mesh_target_counts_;
     std::map<int, std::uint32_t> skin_index_of_id_;
     std::map<MeshId, std::uint32_t> source_index_of_mesh_;
+    std::map<std::uint32_t, std::unique_ptr<GltfGpuInstancing>> gpu_instancing_of_node_;
 };
 
 /// Node poses and morph weights at one time: the scratch state of one apply() call.
@@ -453,8 +486,15 @@ void GltfAnimator::apply(float time, Scene& scene) const {
     }
     const PoseState pose = evaluate_pose(data, t);
 
-    for (InstanceId i : data.moving_instances)
-        scene.instances[i].object_to_world = pose.world[data.instance_nodes[i]].to_float();
+    for (std::size_t k = 0; k < data.moving_instances.size(); ++k) {
+        const InstanceId i = data.moving_instances[k];
+        AffineTransform& transform = scene.instances[i].object_to_world;
+        transform =
+            (pose.world[data.instance_nodes[i]] * data.moving_element_transforms[k]).to_float();
+        // A hidden instance draws nothing, whatever its pose; the scene needs an invertible map.
+        if (data.mesh_ids[i] == data.hidden_mesh && !(std::fabs(transform.determinant()) >= 1e-30f))
+            transform = AffineTransform::identity();
+    }
     for (InstanceId i = 0; i < scene.instances.size(); ++i)
         if (data.instance_is_skinned[i])  // glTF: the skinned node's own transform is ignored
             scene.instances[i].object_to_world = AffineTransform::identity();

@@ -13,40 +13,24 @@
 
 #include "rebraid/core/error.h"
 #include "rebraid/io/gltf_accessor.h"
+#include "rebraid/io/gltf_animation_math.h"
+#include "rebraid/io/gltf_draco.h"
+#include "rebraid/io/gltf_gpu_instancing.h"
+#include "rebraid/io/gltf_meshopt.h"
+#include "rebraid/io/gltf_tinygltf_fixups.h"
 
 namespace rebraid {
 namespace {
 
+// Scene::validate() refuses instances whose |determinant| is below this (no inverse).
+constexpr float kMinDeterminant = 1e-30f;
+
 // Mesh::Triangle holds 32-bit vertex indices, so no mesh may have more positions than this.
 constexpr std::uint64_t kMaxMeshPositions = std::numeric_limits<std::uint32_t>::max();
 
-/// 3x4 affine map in double precision, so long node chains compose without float drift;
-/// converted to AffineTransform once per instance. Columns: x, y, z, translation.
-struct Affine3d {
-    std::array<std::array<double, 3>, 4> columns{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 0}}};
-
-    std::array<double, 3> apply_linear(const std::array<double, 3>& v) const {
-        std::array<double, 3> out{};
-        for (int row = 0; row < 3; ++row)
-            out[row] = columns[0][row] * v[0] + columns[1][row] * v[1] + columns[2][row] * v[2];
-        return out;
-    }
-    /// this * other: first other, then this.
-    Affine3d then_after(const Affine3d& other) const {
-        Affine3d out;
-        for (int c = 0; c < 3; ++c) out.columns[c] = apply_linear(other.columns[c]);
-        out.columns[3] = apply_linear(other.columns[3]);
-        for (int row = 0; row < 3; ++row) out.columns[3][row] += columns[3][row];
-        return out;
-    }
-    AffineTransform to_float() const {
-        auto vec = [](const std::array<double, 3>& c) {
-            return Vec3f{static_cast<float>(c[0]), static_cast<float>(c[1]),
-                         static_cast<float>(c[2])};
-        };
-        return {vec(columns[0]), vec(columns[1]), vec(columns[2]), vec(columns[3])};
-    }
-};
+// Node chains are composed in double, so long chains do not drift, and converted to
+// AffineTransform once per instance.
+using gltf_animation::Affine3d;
 
 /// Number text for messages (std::to_string prints 1e-40 as 0.000000).
 std::string format_number(double value) {
@@ -100,7 +84,7 @@ public:
 
     GltfLoadResult load() {
         parse_model(read_file());
-        check_required_extensions();
+        decode_gltf_meshopt_views(model_, error_prefix());
         for (std::size_t m = 0; m < model_.meshes.size(); ++m) load_mesh(m);
         add_scene_instances();
         try {
@@ -171,7 +155,7 @@ private:
                  std::to_string(bin_end) + ", file has " + std::to_string(declared_length) + ")");
     }
 
-    void parse_model(const std::vector<unsigned char>& bytes) {
+    void parse_model(std::vector<unsigned char> bytes) {
         tinygltf::TinyGLTF parser;
         parser.SetImageLoader(&skip_image_decoding, nullptr);
         const std::string base_dir = std::filesystem::path(path_).parent_path().string();
@@ -186,6 +170,7 @@ private:
             kMaxJsonNesting)
             fail("malformed glTF: JSON nested deeper than " + std::to_string(kMaxJsonNesting) +
                  " levels");
+        const GltfJsonFixes fixes = fix_gltf_json_for_tinygltf(bytes, is_binary);
         if (is_binary) {
             ok = parser.LoadBinaryFromMemory(&model_, &error, &warning, bytes.data(),
                                              static_cast<unsigned int>(bytes.size()), base_dir);
@@ -197,13 +182,7 @@ private:
         while (!error.empty() && (error.back() == '\n' || error.back() == ' ')) error.pop_back();
         if (!ok)
             fail("malformed glTF: " + (error.empty() ? std::string("tinygltf failed") : error));
-    }
-
-    void check_required_extensions() const {
-        // These store geometry outside the plain accessors this loader reads.
-        for (const std::string& name : model_.extensionsRequired)
-            if (name == "KHR_draco_mesh_compression" || name == "EXT_meshopt_compression")
-                fail("requires extension " + name + ", which is not supported");
+        undo_gltf_json_fixes(fixes, model_);
     }
 
     // ---- Accessors ---------------------------------------------------------------------------
@@ -222,9 +201,15 @@ private:
         const std::string role = "POSITION of " + where;
         const GltfElementRange range = resolve_accessor(position->second, role);
         const tinygltf::Accessor& accessor = model_.accessors[std::size_t(position->second)];
-        if (accessor.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
-            accessor.type != TINYGLTF_TYPE_VEC3)
-            fail(role + " must be a float VEC3 accessor");
+        // KHR_mesh_quantization adds (normalized or not) byte and short positions.
+        const int component = accessor.componentType;
+        if (accessor.type != TINYGLTF_TYPE_VEC3 ||
+            (component != TINYGLTF_COMPONENT_TYPE_FLOAT &&
+             component != TINYGLTF_COMPONENT_TYPE_BYTE &&
+             component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+             component != TINYGLTF_COMPONENT_TYPE_SHORT &&
+             component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT))
+            fail(role + " must be a float, byte or short VEC3 accessor");
         if (range.count > options_.max_vertices - vertex_total_)
             fail("more than max_vertices = " + std::to_string(options_.max_vertices) +
                  " vertices (" + role + " adds " + std::to_string(range.count) + ")");
@@ -234,9 +219,16 @@ private:
         const std::size_t base = mesh.positions.size();
         mesh.positions.resize(base + range.count);
         for (std::uint64_t v = 0; v < range.count; ++v) {
-            float xyz[3];
-            std::memcpy(xyz, range.first + v * range.stride, sizeof xyz);
-            const Vec3f p{xyz[0], xyz[1], xyz[2]};
+            const unsigned char* element = range.first + v * range.stride;
+            Vec3f p;
+            if (component == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+                std::memcpy(&p, element, sizeof p);
+            } else {
+                auto read = [&](int k) {
+                    return float(read_gltf_component(element, component, accessor.normalized, k));
+                };
+                p = {read(0), read(1), read(2)};
+            }
             if (!is_finite(p))
                 fail(where + ": vertex " + std::to_string(v) + " position is not finite (" +
                      format_number(p.x) + ", " + format_number(p.y) + ", " + format_number(p.z) +
@@ -312,6 +304,13 @@ private:
 
         const std::uint64_t base = mesh.positions.size();
         const std::uint64_t first_triangle = mesh.triangles.size();
+        if (uses_gltf_draco(primitive)) {
+            append_draco_primitive(primitive, where, mesh);
+            result_.report.mesh_primitives[m].push_back(
+                {std::uint32_t(p), base, mesh.positions.size() - base, first_triangle,
+                 mesh.triangles.size() - first_triangle, primitive.material});
+            return;
+        }
         const std::uint64_t vertex_count = append_positions(primitive, where, mesh);
         const IndexSource indices = index_source(primitive, where, vertex_count);
         const std::uint64_t n = indices.range.count;
@@ -344,6 +343,25 @@ private:
         result_.report.mesh_primitives[m].push_back({std::uint32_t(p), base, vertex_count,
                                                      first_triangle, triangle_count,
                                                      primitive.material});
+    }
+
+    /// A KHR_draco_mesh_compression primitive: decoded points, then faces in decoded order.
+    void append_draco_primitive(const tinygltf::Primitive& primitive, const std::string& where,
+                                Mesh& mesh) {
+        GltfDracoGeometry geometry = decode_gltf_draco_primitive(
+            model_, primitive, where, error_prefix(), options_.max_vertices - vertex_total_,
+            options_.max_triangles - triangle_total_);
+        if (mesh.positions.size() + geometry.positions.size() > kMaxMeshPositions)
+            fail(where + ": the mesh has more than 2^32-1 vertices");
+        vertex_total_ += geometry.positions.size();
+        triangle_total_ += geometry.triangles.size();
+        const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+        mesh.positions.insert(mesh.positions.end(), geometry.positions.begin(),
+                              geometry.positions.end());
+        for (Triangle& triangle : geometry.triangles)
+            for (std::uint32_t& vertex : triangle) vertex += base;
+        mesh.triangles.insert(mesh.triangles.end(), geometry.triangles.begin(),
+                              geometry.triangles.end());
     }
 
     void load_mesh(std::size_t m) {
@@ -416,24 +434,63 @@ private:
         return std::size_t(id);
     }
 
-    void add_instance(std::size_t n, const Affine3d& world) {
+    /// Places node `n`'s mesh: once at `world`, or once per EXT_mesh_gpu_instancing element
+    /// at `world` times the element's T * R * S, consecutively in element order.
+    void add_node_instances(std::size_t n, const Affine3d& world) {
         const tinygltf::Node& node = model_.nodes[n];
-        if (node.mesh < 0) return;
-        if (std::size_t(node.mesh) >= model_.meshes.size())
+        const bool is_gpu_instanced = GltfGpuInstancing::is_used_by(model_, n);
+        if (node.mesh < 0 && !is_gpu_instanced) return;
+        if (node.mesh >= 0 && std::size_t(node.mesh) >= model_.meshes.size())
             fail(node_label(n) + " references missing mesh " + std::to_string(node.mesh) +
                  ", file has " + std::to_string(model_.meshes.size()) + " meshes");
-        const std::size_t instance_id = result_.scene.instances.size();
-        const AffineTransform object_to_world = world.to_float();
-        const std::string label =
-            "instance " + std::to_string(instance_id) + " (" + node_label(n) + ")";
-        if (!object_to_world.is_finite()) fail(label + " has a non-finite transform");
-        const float determinant = object_to_world.determinant();
-        if (!std::isfinite(determinant) || std::fabs(determinant) < 1e-30f)
-            fail(label + " has a singular transform (determinant " + format_number(determinant) +
+        if (!is_gpu_instanced) {
+            add_instance(n, kNotGpuInstanced, world);
+            return;
+        }
+        const GltfGpuInstancing instancing(model_, n, error_prefix());
+        if (instancing.count() > options_.max_instances - result_.scene.instances.size())
+            fail("more than max_instances = " + std::to_string(options_.max_instances) +
+                 " instances (" + node_label(n) + " adds " + std::to_string(instancing.count()) +
                  ")");
-        result_.scene.instances.push_back({MeshId(node.mesh), object_to_world});
+        for (std::uint64_t i = 0; i < instancing.count(); ++i)
+            add_instance(n, std::uint32_t(i), world * instancing.element(i));
+    }
+
+    void add_instance(std::size_t n, std::uint32_t element, const Affine3d& world) {
+        const tinygltf::Node& node = model_.nodes[n];
+        const AffineTransform object_to_world = world.to_float();
+        if (!object_to_world.is_finite())
+            fail("instance " + std::to_string(result_.scene.instances.size()) + " (" +
+                 node_label(n) +
+                 (element == kNotGpuInstanced ? "" : " element " + std::to_string(element)) +
+                 ") has a non-finite transform");
+        if (result_.scene.instances.size() >= options_.max_instances)
+            fail("more than max_instances = " + std::to_string(options_.max_instances) +
+                 " instances");
+        // A zero scale is how exporters hide an object: such an instance keeps its number
+        // but draws the empty hidden mesh (a singular map has no inverse to trace with).
+        const float determinant = object_to_world.determinant();
+        if (!(std::fabs(determinant) >= kMinDeterminant)) {
+            result_.report.hidden_instances.push_back(
+                std::uint32_t(result_.scene.instances.size()));
+            result_.scene.instances.push_back({hidden_mesh(), AffineTransform::identity()});
+        } else {
+            result_.scene.instances.push_back({MeshId(node.mesh), object_to_world});
+        }
         result_.report.instance_node_ids.push_back(std::uint32_t(n));
+        result_.report.instance_gpu_elements.push_back(element);
         if (node.skin >= 0) ++result_.report.skinned_instance_count;
+    }
+
+    /// The empty Mesh that hidden instances use, appended on first use.
+    MeshId hidden_mesh() {
+        if (result_.report.hidden_mesh == kNoHiddenMesh) {
+            result_.report.hidden_mesh = std::uint32_t(result_.scene.meshes.size());
+            Mesh empty;
+            empty.name = "hidden";
+            result_.scene.meshes.push_back(std::move(empty));
+        }
+        return result_.report.hidden_mesh;
     }
 
     void add_scene_instances() {
@@ -469,8 +526,8 @@ private:
                 fail(node_label(n) + " is reached twice in " + scene_label + " (again from " +
                      from + "): a node may have only one parent");
             visit[n] = Visit::kOnPath;
-            const Affine3d world = parent_world.then_after(local_transform(n));
-            add_instance(n, world);
+            const Affine3d world = parent_world * local_transform(n);
+            add_node_instances(n, world);
             path.push_back({n, 0, world});
         };
         for (int root : scene.nodes) {

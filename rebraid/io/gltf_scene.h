@@ -23,6 +23,8 @@ struct GltfLoadOptions {
     /// Maximum vertex positions over all glTF meshes (a POSITION accessor shared by several
     /// primitives counts once per primitive, as the loader copies it per primitive).
     std::uint64_t max_vertices = 1'000'000'000;
+    /// Maximum instances (EXT_mesh_gpu_instancing lets a few bytes stand for one).
+    std::uint64_t max_instances = 200'000'000;
     /// Keep the parsed glTF document in GltfLoadResult::model, for readers of what the scene
     /// model leaves out (animations, skins, morph targets, cameras, materials, texture
     /// coordinates). Off by default: it holds a copy of every buffer.
@@ -42,6 +44,12 @@ struct GltfPrimitiveRange {
     int material = -1;  ///< glTF material index, -1 for none
 };
 
+/// GltfLoadReport::instance_gpu_elements of an instance of a node without
+/// EXT_mesh_gpu_instancing.
+inline constexpr std::uint32_t kNotGpuInstanced = 0xFFFFFFFFu;
+/// GltfLoadReport::hidden_mesh of a scene without hidden instances.
+inline constexpr std::uint32_t kNoHiddenMesh = 0xFFFFFFFFu;
+
 /// What the loader saw besides the scene: useful for tools that explain a file and for the
 /// animation loader, which needs to know which glTF node each instance came from.
 struct GltfLoadReport {
@@ -51,6 +59,16 @@ struct GltfLoadReport {
     /// glTF node index of every instance, in instance order (Scene::instances[i] came from node
     /// instance_node_ids[i]).
     std::vector<std::uint32_t> instance_node_ids;
+    /// Per instance, its element in its node's EXT_mesh_gpu_instancing accessors, or
+    /// kNotGpuInstanced for a node without the extension.
+    std::vector<std::uint32_t> instance_gpu_elements;
+    /// Instances whose transform is singular (|determinant| < 1e-30, e.g. a zero scale,
+    /// which exporters use to hide objects), ascending. Each keeps its number but is placed
+    /// as an identity instance of hidden_mesh, which has no triangles: it is never hit.
+    std::vector<std::uint32_t> hidden_instances;
+    /// The empty Mesh of hidden instances, appended after the file's meshes; kNoHiddenMesh
+    /// when no instance is hidden.
+    std::uint32_t hidden_mesh = kNoHiddenMesh;
     /// Per Mesh (index = MeshId = glTF mesh index), its loaded primitives in order (points
     /// and lines, which are skipped, have no entry).
     std::vector<std::vector<GltfPrimitiveRange>> mesh_primitives;

@@ -7,8 +7,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
+#include <vector>
 
 #include "rebraid/core/error.h"
+#include "rebraid/io/gltf_gpu_instancing.h"
+#include "rebraid/io/gltf_instance_pose.h"
 
 namespace rebraid {
 namespace {
@@ -19,7 +23,8 @@ constexpr std::uint64_t kMaxBufferBytes = std::numeric_limits<std::uint32_t>::ma
 
 class GltfWriter {
 public:
-    GltfWriter(const Scene& scene, const std::string& path) : scene_(scene), path_(path) {}
+    GltfWriter(const Scene& scene, const std::string& path, const GltfWriteSettings& settings)
+        : scene_(scene), path_(path), settings_(settings) {}
 
     void write() {
         const std::string extension = lower_case_extension();
@@ -137,21 +142,75 @@ private:
         model_.meshes.push_back(gltf_mesh);
     }
 
+    int add_matrix_node(const Instance& instance) {
+        const AffineTransform& t = instance.object_to_world;
+        tinygltf::Node node;
+        node.mesh = static_cast<int>(instance.mesh_id);
+        // Column-major 4x4 with bottom row (0 0 0 1); floats widen to double exactly.
+        node.matrix = {t.col_x.x,       t.col_x.y,       t.col_x.z,       0.0,
+                       t.col_y.x,       t.col_y.y,       t.col_y.z,       0.0,
+                       t.col_z.x,       t.col_z.y,       t.col_z.z,       0.0,
+                       t.translation.x, t.translation.y, t.translation.z, 1.0};
+        model_.nodes.push_back(std::move(node));
+        return static_cast<int>(model_.nodes.size() - 1);
+    }
+
+    /// One EXT_mesh_gpu_instancing node for `poses` (instances of `mesh`, in order).
+    int add_instanced_node(MeshId mesh, const std::vector<GltfInstancePose>& poses) {
+        std::vector<float> translations, rotations, scales;
+        for (const GltfInstancePose& pose : poses) {
+            translations.insert(translations.end(), pose.translation.begin(),
+                                pose.translation.end());
+            rotations.insert(rotations.end(), pose.rotation.begin(), pose.rotation.end());
+            scales.insert(scales.end(), pose.scale.begin(), pose.scale.end());
+        }
+        auto add_attribute = [&](const std::vector<float>& values, int type) {
+            const int view = add_view(values.data(), values.size() * sizeof(float), 0);
+            return tinygltf::Value(
+                add_accessor(view, TINYGLTF_COMPONENT_TYPE_FLOAT, poses.size(), type));
+        };
+        tinygltf::Value::Object attributes;
+        attributes["TRANSLATION"] = add_attribute(translations, TINYGLTF_TYPE_VEC3);
+        attributes["ROTATION"] = add_attribute(rotations, TINYGLTF_TYPE_VEC4);
+        attributes["SCALE"] = add_attribute(scales, TINYGLTF_TYPE_VEC3);
+        tinygltf::Value::Object extension;
+        extension["attributes"] = tinygltf::Value(std::move(attributes));
+        tinygltf::Node node;
+        node.mesh = static_cast<int>(mesh);
+        node.extensions[kGltfGpuInstancing] = tinygltf::Value(std::move(extension));
+        model_.nodes.push_back(std::move(node));
+        return static_cast<int>(model_.nodes.size() - 1);
+    }
+
     void add_nodes() {
         tinygltf::Scene gltf_scene;
-        model_.nodes.reserve(scene_.instances.size());
-        gltf_scene.nodes.reserve(scene_.instances.size());
-        for (const Instance& instance : scene_.instances) {
-            const AffineTransform& t = instance.object_to_world;
-            tinygltf::Node node;
-            node.mesh = static_cast<int>(instance.mesh_id);
-            // Column-major 4x4 with bottom row (0 0 0 1); floats widen to double exactly.
-            node.matrix = {t.col_x.x,       t.col_x.y,       t.col_x.z,       0.0,
-                           t.col_y.x,       t.col_y.y,       t.col_y.z,       0.0,
-                           t.col_z.x,       t.col_z.y,       t.col_z.z,       0.0,
-                           t.translation.x, t.translation.y, t.translation.z, 1.0};
-            gltf_scene.nodes.push_back(static_cast<int>(model_.nodes.size()));
-            model_.nodes.push_back(std::move(node));
+        const std::vector<Instance>& instances = scene_.instances;
+        std::size_t i = 0;
+        while (i < instances.size()) {
+            // The longest run from i of one mesh with T * R * S transforms.
+            std::vector<GltfInstancePose> poses;
+            std::size_t end = i;
+            if (settings_.gpu_instancing) {
+                while (end < instances.size() && instances[end].mesh_id == instances[i].mesh_id) {
+                    const std::optional<GltfInstancePose> pose =
+                        decompose_instance_transform(instances[end].object_to_world);
+                    if (!pose) break;
+                    poses.push_back(*pose);
+                    ++end;
+                }
+            }
+            if (poses.size() >= 2) {
+                gltf_scene.nodes.push_back(add_instanced_node(instances[i].mesh_id, poses));
+                i = end;
+            } else {
+                gltf_scene.nodes.push_back(add_matrix_node(instances[i]));
+                ++i;
+            }
+        }
+        if (model_.nodes.size() < instances.size()) {
+            model_.extensionsUsed.push_back(kGltfGpuInstancing);
+            // Required: a reader without it would show one instance per node, a wrong scene.
+            model_.extensionsRequired.push_back(kGltfGpuInstancing);
         }
         model_.scenes.push_back(std::move(gltf_scene));
         model_.defaultScene = 0;
@@ -184,13 +243,15 @@ private:
 
     const Scene& scene_;
     std::string path_;
+    GltfWriteSettings settings_;
     tinygltf::Model model_;
 };
 
 }  // namespace
 
-void write_gltf_scene(const Scene& scene, const std::string& path) {
-    GltfWriter(scene, path).write();
+void write_gltf_scene(const Scene& scene, const std::string& path,
+                      const GltfWriteSettings& settings) {
+    GltfWriter(scene, path, settings).write();
 }
 
 }  // namespace rebraid

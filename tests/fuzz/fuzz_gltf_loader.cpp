@@ -60,12 +60,14 @@ bool verbose() {
 void load_and_check(const std::string& path) {
     // Small limits: an input may declare huge counts, but the loader must refuse them
     // before it allocates, which these limits make cheap to check.
-    const rebraid::GltfLoadOptions options{.max_triangles = 1u << 20, .max_vertices = 1u << 20};
+    const rebraid::GltfLoadOptions options{
+        .max_triangles = 1u << 20, .max_vertices = 1u << 20, .max_instances = 1u << 20};
     try {
         const rebraid::Scene scene = rebraid::load_gltf_scene(path, options);
         scene.validate();  // the loader promises a valid scene
         if (scene.instances.empty()) std::abort();
         if (scene.mesh_triangle_count() > options.max_triangles) std::abort();
+        if (scene.instances.size() > options.max_instances) std::abort();
         if (verbose())
             std::fprintf(stderr, "  loaded %s: %zu meshes, %zu instances\n", path.c_str(),
                          scene.meshes.size(), scene.instances.size());

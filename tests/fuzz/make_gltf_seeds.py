@@ -13,13 +13,17 @@ Three families, every one small (the largest is well under fuzz.sh's -max_len):
 - ok_* and anim_*: small valid files, like the loader tests' and the animation tests' (every
   topology, strides and offsets, transforms, default scenes, skins, morph targets, STEP /
   LINEAR / CUBICSPLINE channels).
+- ok_gpu_*, ok_quantized_*, bad_gpu_*: EXT_mesh_gpu_instancing (with a zero-scale, hidden
+  instance) and KHR_mesh_quantization files, valid and broken.
 - bad_*: every input the loader rejects (tests/io/gltf_scene_test.cpp,
   tests/cli/bad_input_test.cpp, docs/testing.md "Bad input"), as a small file.
 
 Whole documents are written both as .gltf (buffer in a data: URI) and as .glb (BIN chunk), so
 both containers are explored from the start; container damage (truncated GLB, a header
 claiming 4 GiB, broken JSON) is written in its own container only. Hand-written .gltf seeds
-in the folder (two_meshes.gltf) are kept and get a .glb twin. Only the standard library is
+in the folder (two_meshes.gltf) are kept and get a .glb twin; so are the tool_*.glb seeds,
+Draco, meshopt, quantized and instanced copies of scene_*.glb seeds made by the glTF Transform command
+line (tests/io/assets/make_assets.sh). Only the standard library is
 used; the output is deterministic, so running the script again changes nothing.
 """
 import base64
@@ -694,6 +698,79 @@ def bad_seeds():
     seed_doc("bad_strip_of_two_indices", topology(True))
 
 
+def instancing(attributes):
+    return {"EXT_mesh_gpu_instancing": {"attributes": attributes}}
+
+
+def gpu_instanced(edit=None, required=True):
+    """Node 0 plain; node 1 (translated) instanced three times, with child node 2."""
+    doc = triangle_with_nodes([], [])
+    translation = doc.add_values([10, 0, 0, 0, 10, 0, 0, 0, 10], FLOAT, "VEC3")
+    half = round(math.sqrt(0.5) * 32767)
+    rotation = doc.add_values([0, 0, 0, 32767, 0, 0, half, half, 0, 0, 0, 32767], SHORT, "VEC4",
+                              normalized=True)
+    scale = doc.add_values([1, 1, 1, 0, 0, 0, 3, 3, 3], FLOAT, "VEC3")
+    doc.add_node({"mesh": 0})
+    doc.add_node({"mesh": 0, "translation": [0, 0, 100], "children": [2],
+                  "extensions": instancing({"TRANSLATION": translation, "ROTATION": rotation,
+                                            "SCALE": scale})})
+    doc.add_node({"mesh": 0, "scale": [0, 0, 0]})
+    doc.json["scenes"] = [{"nodes": [0, 1]}]
+    doc.json["extensionsUsed"] = ["EXT_mesh_gpu_instancing"]
+    if required:
+        doc.json["extensionsRequired"] = ["EXT_mesh_gpu_instancing"]
+    if edit:
+        edit(doc)
+    return doc
+
+
+def extension_seeds():
+    """EXT_mesh_gpu_instancing, hidden (zero-scale) instances, KHR_mesh_quantization."""
+    seed_doc("ok_gpu_instancing_with_hidden", gpu_instanced())
+    seed_doc("ok_gpu_instancing_not_required", gpu_instanced(required=False))
+
+    def quantized(component_type, normalized, values):
+        doc = Doc()
+        fmt, size = COMPONENT[component_type]
+        data = b"".join(struct.pack("<3" + fmt, *values[3 * v:3 * v + 3]) +
+                        b"\0" * (-3 * size % 4) for v in range(3))
+        view = doc.add_view(data, 4 if size == 1 else 8)
+        positions = doc.add_accessor(view, component_type, 3, "VEC3", normalized=normalized)
+        doc.add_mesh([primitive(positions)])
+        doc.add_node({"mesh": 0, "scale": [2, 2, 2]})
+        doc.add_scene([0])
+        doc.json["extensionsUsed"] = doc.json["extensionsRequired"] = ["KHR_mesh_quantization"]
+        return doc
+    seed_doc("ok_quantized_byte_normalized", quantized(BYTE, True, [0, 0, 0, 127, 0, -128, 0, 127, 0]))
+    seed_doc("ok_quantized_ushort", quantized(UNSIGNED_SHORT, False, [0, 0, 0, 900, 0, 2, 0, 3, 0]))
+
+    def accessor_edit(index, **fields):
+        return lambda doc: doc.json["accessors"][index].update(fields)
+
+    def extension_edit(change):
+        return lambda doc: change(doc.json["nodes"][1]["extensions"]["EXT_mesh_gpu_instancing"])
+    seed_doc("bad_gpu_counts_differ", gpu_instanced(accessor_edit(3, count=2)))
+    seed_doc("bad_gpu_count_zero", gpu_instanced(
+        lambda doc: [doc.json["accessors"][a].update(count=0) for a in (1, 2, 3)]))
+    seed_doc("bad_gpu_translation_ushort", gpu_instanced(accessor_edit(1, componentType=UNSIGNED_SHORT)))
+    seed_doc("bad_gpu_rotation_not_normalized", gpu_instanced(accessor_edit(2, normalized=False)))
+    seed_doc("bad_gpu_past_its_buffer", gpu_instanced(accessor_edit(1, count=300)))
+    seed_doc("bad_gpu_without_mesh", gpu_instanced(lambda doc: doc.json["nodes"][1].pop("mesh")))
+    seed_doc("bad_gpu_unknown_attribute",
+             gpu_instanced(extension_edit(lambda e: e["attributes"].update(COLOR=1))))
+    seed_doc("bad_gpu_missing_accessor",
+             gpu_instanced(extension_edit(lambda e: e["attributes"].update(SCALE=99))))
+
+    def rotation_seed(name, w):
+        doc = triangle_with_nodes([], [])
+        rotation = doc.add_values([0, 0, 0, 1, 0, 0, 0, w], FLOAT, "VEC4")
+        doc.add_node({"mesh": 0, "extensions": instancing({"ROTATION": rotation})})
+        doc.json["scenes"] = [{"nodes": [0]}]
+        seed_doc(name, doc)
+    rotation_seed("bad_gpu_rotation_not_unit", 0.5)
+    rotation_seed("bad_gpu_rotation_zero", 0.0)
+
+
 def hand_written_twins():
     """A .glb twin of every hand-written .gltf seed (two_meshes.gltf) in the folder."""
     for file in sorted(os.listdir(OUT)) if os.path.isdir(OUT) else []:
@@ -712,6 +789,7 @@ def main():
     valid_seeds()
     animation_seeds()
     bad_seeds()
+    extension_seeds()
     hand_written_twins()
     os.makedirs(OUT, exist_ok=True)
     for name in sorted(SEEDS):

@@ -501,10 +501,18 @@ TEST(GltfSceneErrors, EmptyScene) {
                       "empty scene");
 }
 
-TEST(GltfSceneErrors, NonFiniteOrSingularNodeTransform) {
-    expect_load_error(
-        triangle_with_nodes({{{"mesh", 0}, {"scale", {1, 0, 1}}}}, {0}).write_glb("singular.glb"),
-        "singular transform");
+TEST(GltfScene, SingularNodeTransformHidesTheInstance) {
+    const GltfLoadResult loaded = load_gltf_scene_with_report(
+        triangle_with_nodes({{{"mesh", 0}, {"scale", {1, 0, 1}}}, {{"mesh", 0}}}, {0, 1})
+            .write_glb("singular.glb"));
+    ASSERT_EQ(loaded.scene.instances.size(), 2u);
+    EXPECT_EQ(loaded.report.hidden_instances, std::vector<std::uint32_t>{0});
+    EXPECT_EQ(loaded.scene.instances[0].mesh_id, loaded.report.hidden_mesh);
+    EXPECT_TRUE(loaded.scene.meshes.at(loaded.report.hidden_mesh).triangles.empty());
+    EXPECT_EQ(loaded.scene.instances[1].mesh_id, 0u);
+}
+
+TEST(GltfSceneErrors, NonFiniteNodeTransform) {
     // Finite in the file, but not as a float.
     expect_load_error(triangle_with_nodes({{{"mesh", 0}, {"translation", {1e39, 0, 0}}}}, {0})
                           .write_glb("overflow.glb"),
@@ -529,7 +537,7 @@ TEST(GltfSceneErrors, UnsupportedAccessors) {
     expect_load_error(sparse.write_glb("sparse.glb"), "sparse accessors not supported");
     GltfTestFile vec2 = valid_file();
     vec2.json["accessors"][0]["type"] = "VEC2";
-    expect_load_error(vec2.write_glb("vec2.glb"), "must be a float VEC3 accessor");
+    expect_load_error(vec2.write_glb("vec2.glb"), "must be a float, byte or short VEC3 accessor");
     GltfTestFile no_position = valid_file();
     no_position.json["meshes"][0]["primitives"][0]["attributes"] = {{"NORMAL", 0}};
     expect_load_error(no_position.write_glb("no_position.glb"), "no POSITION attribute");
