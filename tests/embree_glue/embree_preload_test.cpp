@@ -1,0 +1,166 @@
+// librebraid_preload.so under unmodified Embree programs: our client (preload_client/) and
+// Embree's own tutorial programs (Debian's embree-tools). Each runs without and with the
+// preload; what it prints and the image it writes must be the same, and the preload's log
+// must say which scenes rebraid served and why Embree kept the others.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "support/cli_runner.h"
+
+namespace rebraid::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Runs `command` in `dir`/`run` with `environment` ("NAME=value ...") before it.
+CommandResult run_program(const fs::path& dir, const std::string& run,
+                          const std::string& environment, const std::string& command) {
+    const fs::path run_dir = dir / run;
+    fs::create_directories(run_dir);
+    return run_shell_in(run_dir, "cd " + shell_quote(run_dir.string()) + " && timeout 300 env " +
+                                     environment + " " + command);
+}
+
+std::string preload_environment(const std::string& more = "") {
+    return "LD_PRELOAD=" + shell_quote(REBRAID_PRELOAD_LIBRARY) + " REBRAID_PRELOAD_LOG=1 " + more;
+}
+
+std::size_t count_lines_with(const std::string& text, const std::string& part) {
+    std::size_t count = 0;
+    for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1))
+        ++count;
+    return count;
+}
+
+std::string client_command(const std::string& arguments) {
+    return shell_quote(REBRAID_PRELOAD_CLIENT) + " " + arguments;
+}
+
+TEST(EmbreePreload, ClientGetsEmbreesAnswersFromEveryRayQuery) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult embree = run_program(dir, "embree", "", client_command("trace"));
+    const CommandResult preload =
+        run_program(dir, "preload", preload_environment(), client_command("trace"));
+    ASSERT_EQ(embree.exit_code, 0) << embree.err;
+    ASSERT_EQ(preload.exit_code, 0) << preload.err;
+    EXPECT_GT(count_lines_with(embree.out, " geom "), 1000u) << "the rays must hit something";
+    EXPECT_TRUE(embree.out == preload.out) << "answers differ: see " << dir;
+    // The served scene at each of its two commits; the scene it instances is never traced.
+    EXPECT_EQ(count_lines_with(preload.err, "rebraid serves it"), 2u) << preload.err;
+    EXPECT_EQ(count_lines_with(preload.err, "(updated: "), 1u) << preload.err;
+    EXPECT_EQ(count_lines_with(preload.err, "Embree serves it"), 3u) << preload.err;
+    EXPECT_NE(preload.err.find("RTC_GEOMETRY_TYPE_QUAD"), std::string::npos) << preload.err;
+    EXPECT_NE(preload.err.find("filter"), std::string::npos) << preload.err;
+    EXPECT_NE(preload.err.find("time step"), std::string::npos) << preload.err;
+}
+
+TEST(EmbreePreload, OffLeavesEverySceneToEmbreeSilently) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult embree = run_program(dir, "embree", "", client_command("trace"));
+    const CommandResult off =
+        run_program(dir, "off", preload_environment("REBRAID_PRELOAD=0"), client_command("trace"));
+    ASSERT_EQ(off.exit_code, 0) << off.err;
+    EXPECT_TRUE(embree.out == off.out);
+    EXPECT_EQ(off.err, "");
+}
+
+TEST(EmbreePreload, BadSettingSaysSoOnceAndLeavesEverySceneToEmbree) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult embree = run_program(dir, "embree", "", client_command("trace"));
+    const CommandResult bad = run_program(dir, "bad", preload_environment("REBRAID_PRELOAD=yes"),
+                                          client_command("trace"));
+    ASSERT_EQ(bad.exit_code, 0) << bad.err;
+    EXPECT_TRUE(embree.out == bad.out);
+    EXPECT_EQ(bad.err,
+              "rebraid preload: REBRAID_PRELOAD=yes: expected 0 or 1; Embree serves every scene\n");
+}
+
+TEST(EmbreePreload, ExportsEmbreesNamesOnly) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult symbols =
+        run_program(dir, "nm", "", "nm -D --defined-only " + shell_quote(REBRAID_PRELOAD_LIBRARY));
+    ASSERT_EQ(symbols.exit_code, 0) << symbols.err;
+    std::size_t count = 0;
+    std::istringstream lines(symbols.out);
+    for (std::string line; std::getline(lines, line); ++count)
+        EXPECT_NE(line.find(" rtc"), std::string::npos) << line;
+    EXPECT_GT(count, 40u);
+    EXPECT_NE(symbols.out.find(" rtcIntersect1\n"), std::string::npos);
+    EXPECT_NE(symbols.out.find(" rtcOccludedNp\n"), std::string::npos);
+}
+
+// ---- Embree's tutorial programs -----------------------------------------------------------
+
+/// One program of embree-tools, run with `arguments` without and with the preload.
+struct TutorialRun {
+    CommandResult embree;
+    CommandResult preload;
+    fs::path dir;
+};
+
+TutorialRun run_tutorial(const std::string& program, const std::string& arguments,
+                         const std::string& preload_settings = "") {
+    TutorialRun run;
+    run.dir = test_scratch_dir("embree_preload", true);
+    const std::string command = "/usr/bin/" + program + " " + arguments;
+    run.embree = run_program(run.dir, "embree", "", command);
+    run.preload = run_program(run.dir, "preload", preload_environment(preload_settings), command);
+    return run;
+}
+
+bool has_tutorials(const std::string& program) {
+    return fs::exists("/usr/bin/" + program);
+}
+
+#define REQUIRE_TUTORIAL(program)                                 \
+    if (!has_tutorials(program))                                  \
+    GTEST_SKIP() << "/usr/bin/" program                           \
+                    " is missing: install Debian's embree-tools " \
+                    "(scripts/install-deps.sh)"
+
+/// Runs `program` writing image.ppm, and expects exit code 0 and the same image both times.
+TutorialRun expect_same_image(const std::string& program, const std::string& arguments,
+                              const std::string& preload_settings = "") {
+    TutorialRun run = run_tutorial(program, arguments + " -o image.ppm", preload_settings);
+    EXPECT_EQ(run.embree.exit_code, 0) << run.embree.err;
+    EXPECT_EQ(run.preload.exit_code, 0) << run.preload.err;
+    const std::string embree_image = read_text_file(run.dir / "embree" / "image.ppm");
+    const std::string preload_image = read_text_file(run.dir / "preload" / "image.ppm");
+    EXPECT_GT(embree_image.size(), 1000u);
+    EXPECT_TRUE(embree_image == preload_image) << "images differ: " << run.dir;
+    return run;
+}
+
+TEST(EmbreeTools, MinimalPrintsTheSameHits) {
+    REQUIRE_TUTORIAL("minimal");
+    const TutorialRun run = run_tutorial("minimal", "");
+    EXPECT_EQ(run.preload.exit_code, 0);
+    EXPECT_NE(run.embree.out.find("Found intersection on geometry 0, primitive 0"),
+              std::string::npos);
+    EXPECT_EQ(run.embree.out, run.preload.out);
+    EXPECT_EQ(count_lines_with(run.preload.err, "rebraid serves it"), 1u) << run.preload.err;
+}
+
+// 63 x 63: at an even width the middle column of pixels looks exactly along an edge of the
+// cube, where two faces are hit at the same distance (a tie: Embree and rebraid may each
+// report either face).
+TEST(EmbreeTools, TriangleGeometryRendersTheSameImage) {
+    REQUIRE_TUTORIAL("triangle_geometry");
+    const TutorialRun run = expect_same_image("triangle_geometry", "--size 63 63");
+    EXPECT_EQ(count_lines_with(run.preload.err, "rebraid serves it"), 1u) << run.preload.err;
+}
+
+TEST(EmbreeTools, InstancedGeometryRendersTheSameImage) {
+    REQUIRE_TUTORIAL("instanced_geometry");
+    const TutorialRun run = expect_same_image("instanced_geometry", "--size 63 63");
+    EXPECT_GE(count_lines_with(run.preload.err, "rebraid serves it"), 1u) << run.preload.err;
+    EXPECT_EQ(count_lines_with(run.preload.err, "Embree serves it"), 0u) << run.preload.err;
+}
+
+}  // namespace
+}  // namespace rebraid::test
