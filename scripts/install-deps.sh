@@ -7,6 +7,7 @@ packages=(
     libembree-dev libtbb-dev libopenimageio-dev openimageio-tools libtinygltf-dev nlohmann-json3-dev
     libcli11-dev libgtest-dev libbenchmark-dev
     python3 python3-matplotlib
+    embree-tools
 )
 missing=()
 for p in "${packages[@]}"; do

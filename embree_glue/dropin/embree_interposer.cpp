@@ -109,7 +109,7 @@ void rtcCommitScene(RTCScene scene) {
     call_real(real, scene);
     record([&] { registry::on_commit_scene(scene); });
     if (InterposerObserver* observer = g_observer.load(std::memory_order_acquire))
-        observer->scene_committed(scene);
+        observer->scene_committed(scene, false);
 }
 
 void rtcJoinCommitScene(RTCScene scene) {
@@ -117,7 +117,7 @@ void rtcJoinCommitScene(RTCScene scene) {
     call_real(real, scene);
     record([&] { registry::on_commit_scene(scene); });
     if (InterposerObserver* observer = g_observer.load(std::memory_order_acquire))
-        observer->scene_committed(scene);
+        observer->scene_committed(scene, true);
 }
 
 unsigned int rtcAttachGeometry(RTCScene scene, RTCGeometry geometry) {

@@ -31,8 +31,9 @@ namespace rebraid::glue {
 class InterposerObserver {
 public:
     virtual ~InterposerObserver() = default;
-    /// After rtcCommitScene or rtcJoinCommitScene returned and the registry recorded it.
-    virtual void scene_committed(RTCScene scene) noexcept = 0;
+    /// After rtcCommitScene or rtcJoinCommitScene (`is_join`: every thread that joined the
+    /// commit returns from it, at different times) returned and the registry recorded it.
+    virtual void scene_committed(RTCScene scene, bool is_join) noexcept = 0;
     /// Before rtcReleaseScene is forwarded (the scene and its record are still alive).
     virtual void scene_releasing(RTCScene scene) noexcept = 0;
 };

@@ -18,7 +18,7 @@ namespace {
 struct LastAnswer {
     RTCScene scene = nullptr;
     std::uint64_t generation = 0;
-    const EmbreeAccel* accel = nullptr;
+    ServedScene served;
 };
 thread_local LastAnswer t_last_answer __attribute__((tls_model("initial-exec")));
 
@@ -54,31 +54,35 @@ PreloadScenes::PreloadScenes(PreloadSettings settings) : settings_(std::move(set
 
 PreloadScenes::~PreloadScenes() = default;
 
-const EmbreeAccel* PreloadScenes::served(RTCScene scene) noexcept {
+ServedScene PreloadScenes::served(RTCScene scene) noexcept {
     const LastAnswer& last = t_last_answer;
     if (last.scene == scene && last.generation == generation_.load(std::memory_order_acquire))
-        return last.accel;
+        return last.served;
     return served_after_commit(scene);
 }
 
-const EmbreeAccel* PreloadScenes::served_after_commit(RTCScene scene) noexcept {
+ServedScene PreloadScenes::served_after_commit(RTCScene scene) noexcept {
     SceneState* state = nullptr;
+    std::shared_ptr<tbb::collaborative_once_flag> decision;
     std::uint64_t generation = 0;
     {
         const std::lock_guard lock(mutex_);
         generation = generation_.load(std::memory_order_relaxed);
         const auto found = scenes_.find(scene);
-        if (found != scenes_.end()) state = &found->second;
+        if (found != scenes_.end()) {
+            state = &found->second;
+            decision = state->decision;
+        }
     }
-    const EmbreeAccel* accel = nullptr;
+    ServedScene served;
     if (state != nullptr) {
         // The record stays: only the scene's release or commit, during which the application
         // may not trace it, changes or erases it.
-        tbb::collaborative_call_once(*state->decision, [&] { decide(scene, *state); });
-        if (state->is_served) accel = state->accel.get();
+        tbb::collaborative_call_once(*decision, [&] { decide(scene, *state); });
+        if (state->is_served) served = {state->accel.get()};
     }
-    t_last_answer = {scene, generation, accel};
-    return accel;
+    t_last_answer = {scene, generation, served};
+    return served;
 }
 
 void PreloadScenes::decide(RTCScene scene, SceneState& state) noexcept {
@@ -89,6 +93,8 @@ void PreloadScenes::decide(RTCScene scene, SceneState& state) noexcept {
     std::string message;
     bool is_served = false;
     try {
+        if (state.is_join_committed)
+            throw Error("committed with rtcJoinCommitScene, which rebraid leaves to Embree");
         check_scene_flags(scene);
         if (state.accel) {
             state.accel->update();
@@ -113,11 +119,13 @@ void PreloadScenes::decide(RTCScene scene, SceneState& state) noexcept {
     // comes back through scene_releasing).
 }
 
-void PreloadScenes::scene_committed(RTCScene scene) noexcept {
+void PreloadScenes::scene_committed(RTCScene scene, bool is_join) noexcept {
     try {
-        auto decision = std::make_unique<tbb::collaborative_once_flag>();
+        auto decision = std::make_shared<tbb::collaborative_once_flag>();
         const std::lock_guard lock(mutex_);
-        scenes_[scene].decision = std::move(decision);
+        SceneState& state = scenes_[scene];
+        state.decision = std::move(decision);
+        state.is_join_committed = is_join;
         generation_.fetch_add(1, std::memory_order_release);
     } catch (...) {
         // Out of memory: Embree answers the scene from now on.

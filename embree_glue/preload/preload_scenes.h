@@ -28,6 +28,11 @@ namespace rebraid::glue {
 /// Embree's rules make the lookups safe without a lock per ray: a scene is neither traced while
 /// it is committed nor after its release. A thread remembers its last answer together with a
 /// generation that every commit and release moves on, and asks again when it changed.
+/// What answers a scene's rays.
+struct ServedScene {
+    const EmbreeAccel* accel = nullptr;  ///< null: Embree
+};
+
 class PreloadScenes final : public InterposerObserver {
 public:
     explicit PreloadScenes(PreloadSettings settings);
@@ -36,12 +41,14 @@ public:
     PreloadScenes(const PreloadScenes&) = delete;
     PreloadScenes& operator=(const PreloadScenes&) = delete;
 
-    /// The structure answering the rays of `scene`, or null when Embree answers them (never
-    /// committed, not servable, or the preload is off).
-    const EmbreeAccel* served(RTCScene scene) noexcept;
+    /// The structure answering the rays of `scene`; Embree's (null) when the scene was never
+    /// committed or cannot be served.
+    ServedScene served(RTCScene scene) noexcept;
 
-    /// Starts a new decision for the scene's next trace.
-    void scene_committed(RTCScene scene) noexcept override;
+    /// Starts a new decision for the scene's next trace. A scene committed with
+    /// rtcJoinCommitScene is left to Embree: a thread may trace it as soon as its own join
+    /// returns, while the other joiners' calls still come in.
+    void scene_committed(RTCScene scene, bool is_join) noexcept override;
     /// Frees what was built for the scene when this is the application's last reference.
     void scene_releasing(RTCScene scene) noexcept override;
 
@@ -50,14 +57,16 @@ public:
 
 private:
     struct SceneState {
-        /// Made anew at each commit: the decision for that commit runs once.
-        std::unique_ptr<tbb::collaborative_once_flag> decision;
+        /// Made anew at each commit: the decision for that commit runs once. Shared with the
+        /// threads waiting for it.
+        std::shared_ptr<tbb::collaborative_once_flag> decision;
         /// Built for an earlier commit or this one; kept to be updated by the next commit.
         std::unique_ptr<EmbreeAccel> accel;
-        bool is_served = false;  ///< the decision for the last commit was rebraid
+        bool is_served = false;          ///< the decision for the last commit was rebraid
+        bool is_join_committed = false;  ///< committed with rtcJoinCommitScene
     };
 
-    const EmbreeAccel* served_after_commit(RTCScene scene) noexcept;
+    ServedScene served_after_commit(RTCScene scene) noexcept;
     void decide(RTCScene scene, SceneState& state) noexcept;
     void log(RTCScene scene, const std::string& message) const;
 

@@ -40,11 +40,18 @@ PreloadScenes* g_scenes = nullptr;
     }
 }
 
-/// The structure for a query on `scene` with `context`, or null for Embree.
+/// How a query on `scene` with `context` is answered: rebraid's structure, or Embree (null).
 const EmbreeAccel* served(RTCScene scene, const RTCIntersectContext* context) noexcept {
     if (g_scenes == nullptr) return nullptr;
-    if (context != nullptr && context->filter != nullptr) return nullptr;
-    return g_scenes->served(scene);
+    if (context != nullptr) {
+        // Embree calls a context's filter function, which only it can call at the right moments.
+        if (context->filter != nullptr) return nullptr;
+        // A ray the application traces from its own instancing (a user geometry's intersect
+        // function tracing another scene with the instance on the context's stack): Embree
+        // reports and limits instance levels from that stack.
+        if (context->instID[0] != RTC_INVALID_GEOMETRY_ID) return nullptr;
+    }
+    return g_scenes->served(scene).accel;
 }
 
 #define REBRAID_REAL(name) static auto* const real = next_definition<decltype(name)>(#name)

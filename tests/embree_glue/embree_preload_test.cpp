@@ -162,5 +162,37 @@ TEST(EmbreeTools, InstancedGeometryRendersTheSameImage) {
     EXPECT_EQ(count_lines_with(run.preload.err, "Embree serves it"), 0u) << run.preload.err;
 }
 
+/// A program whose scenes the preload must leave to Embree, and a part of the reason the
+/// log gives.
+struct LeftToEmbree {
+    const char* program;
+    const char* reason;
+};
+
+class EmbreeToolsLeftToEmbree : public ::testing::TestWithParam<LeftToEmbree> {};
+
+TEST_P(EmbreeToolsLeftToEmbree, RendersTheSameImageAndTheLogSaysWhy) {
+    const LeftToEmbree& expected = GetParam();
+    if (!has_tutorials(expected.program)) GTEST_SKIP() << expected.program << " is missing";
+    const TutorialRun run = expect_same_image(expected.program, "--size 63 63");
+    EXPECT_GE(count_lines_with(run.preload.err, "Embree serves it"), 1u) << run.preload.err;
+    EXPECT_NE(run.preload.err.find(expected.reason), std::string::npos) << run.preload.err;
+}
+
+// user_geometry instances scenes of triangles through its own user geometry; those nested
+// queries carry the instance on the context's stack and go to Embree too. lazy_geometry
+// builds and commits scenes from inside its intersect function while other threads trace
+// (rebraid serves those inner scenes; its user geometry stays with Embree).
+INSTANTIATE_TEST_SUITE_P(Tutorials, EmbreeToolsLeftToEmbree,
+                         ::testing::Values(LeftToEmbree{"user_geometry", "RTC_GEOMETRY_TYPE_USER"},
+                                           LeftToEmbree{"lazy_geometry", "RTC_GEOMETRY_TYPE_USER"},
+                                           LeftToEmbree{"intersection_filter", "filter function"},
+                                           LeftToEmbree{"motion_blur_geometry", "motion blur"},
+                                           LeftToEmbree{"curve_geometry", "curve geometry"},
+                                           LeftToEmbree{"dynamic_scene", "RTC_SCENE_FLAG_ROBUST"}),
+                         [](const ::testing::TestParamInfo<LeftToEmbree>& info) {
+                             return std::string(info.param.program);
+                         });
+
 }  // namespace
 }  // namespace rebraid::test
