@@ -14,7 +14,8 @@ struct PreloadSettings {
     bool is_enabled = true;
     /// REBRAID_PRELOAD_LOG (default 0): 1 prints one line per decision on stderr.
     bool is_logging = false;
-    /// The structure built for each served scene (REBRAID_ACCEL and its settings).
+    /// The structure built for each served scene: REBRAID_ACCEL, in the `rebraid` command's
+    /// `--accel` grammar (`rebraid:opening=extent:object-builder=embree-high`).
     EmbreeAccelSettings accel{};
 };
 

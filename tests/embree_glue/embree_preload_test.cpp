@@ -82,6 +82,41 @@ TEST(EmbreePreload, BadSettingSaysSoOnceAndLeavesEverySceneToEmbree) {
               "rebraid preload: REBRAID_PRELOAD=yes: expected 0 or 1; Embree serves every scene\n");
 }
 
+TEST(EmbreePreload, AccelSettingsFromTheEnvironmentGiveTheSameAnswers) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult embree = run_program(dir, "embree", "", client_command("trace"));
+    for (const char* spec : {"rebraid:opening=extent:bref-bounds=box",
+                             "rebraid:object-builder=embree-high:open-threshold=0.5"}) {
+        SCOPED_TRACE(spec);
+        const CommandResult preload =
+            run_program(dir, "preload", preload_environment("REBRAID_ACCEL=" + std::string(spec)),
+                        client_command("trace"));
+        ASSERT_EQ(preload.exit_code, 0) << preload.err;
+        EXPECT_TRUE(embree.out == preload.out);
+        EXPECT_EQ(count_lines_with(preload.err, "rebraid serves it"), 2u) << preload.err;
+    }
+}
+
+TEST(EmbreePreload, BadAccelSettingSaysWhyAndLeavesEverySceneToEmbree) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult embree = run_program(dir, "embree", "", client_command("trace"));
+    const CommandResult bad =
+        run_program(dir, "bad", preload_environment("REBRAID_ACCEL=rebraid:opening=widest"),
+                    client_command("trace"));
+    ASSERT_EQ(bad.exit_code, 0) << bad.err;
+    EXPECT_TRUE(embree.out == bad.out);
+    EXPECT_EQ(bad.err,
+              "rebraid preload: REBRAID_ACCEL=rebraid:opening=widest: accel "
+              "'rebraid:opening=widest': opening=widest: valid values: extent, sah, overlap; "
+              "Embree serves every scene\n");
+    const CommandResult other = run_program(dir, "other", preload_environment("REBRAID_ACCEL=flat"),
+                                            client_command("trace"));
+    EXPECT_TRUE(embree.out == other.out);
+    EXPECT_NE(other.err.find("REBRAID_ACCEL=flat: the preload builds rebraid only"),
+              std::string::npos)
+        << other.err;
+}
+
 TEST(EmbreePreload, ExportsEmbreesNamesOnly) {
     const fs::path dir = test_scratch_dir("embree_preload", true);
     const CommandResult symbols =
