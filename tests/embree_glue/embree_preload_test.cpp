@@ -131,6 +131,28 @@ TEST(EmbreePreload, ExportsEmbreesNamesOnly) {
     EXPECT_NE(symbols.out.find(" rtcOccludedNp\n"), std::string::npos);
 }
 
+/// The resident memory the client printed after `cycle` cycles, or -1.
+long resident_after(const std::string& out, int cycle) {
+    const std::string key = "cycle " + std::to_string(cycle) + ": resident ";
+    const std::size_t at = out.find(key);
+    return at == std::string::npos ? -1 : std::stol(out.substr(at + key.size()));
+}
+
+// Each cycle creates, commits, traces (so rebraid builds) and releases two scenes; what the
+// preload built must go with them (Embree's scene included: the structure holds a reference).
+TEST(MemoryEmbreePreload, CreateCommitTraceReleaseCyclesDoNotGrow) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult run =
+        run_program(dir, "preload", "LD_PRELOAD=" + shell_quote(REBRAID_PRELOAD_LIBRARY),
+                    client_command("cycles 3000"));
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const long after_300 = resident_after(run.out, 300), after_3000 = resident_after(run.out, 3000);
+    ASSERT_GT(after_300, 0) << run.out;
+    ASSERT_GT(after_3000, 0) << run.out;
+    // A leaked structure or scene costs tens of kB per cycle: 2,700 of them would be many MB.
+    EXPECT_LT(after_3000 - after_300, 1024) << run.out;
+}
+
 // ---- Embree's tutorial programs -----------------------------------------------------------
 
 /// One program of embree-tools, run with `arguments` without and with the preload.
