@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <ostream>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -298,6 +299,11 @@ struct LeftToEmbree {
     const char* program;
     const char* reason;
 };
+
+// Names the parameter in test listings (ctest shows it).
+void PrintTo(const LeftToEmbree& expected, std::ostream* out) {
+    *out << expected.program;
+}
 
 class EmbreeToolsLeftToEmbree : public ::testing::TestWithParam<LeftToEmbree> {};
 
