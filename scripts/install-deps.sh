@@ -8,6 +8,7 @@ packages=(
     libdraco-dev libmeshoptimizer-dev
     libcli11-dev libgtest-dev libbenchmark-dev
     python3 python3-matplotlib
+    embree-tools
 )
 missing=()
 for p in "${packages[@]}"; do

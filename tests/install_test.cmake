@@ -6,7 +6,7 @@
 #      EmbreeAccel and the user-geometry scene, before and after an update; its --help and a
 #      bad --mode;
 #   4. configure, build and run examples/minimal (the library alone, <rebraid/rebraid.h>);
-#   5. run the installed `rebraid` command.
+#   5. run the installed `rebraid` command (the preload library is installed in lib/ too).
 # Only public headers are installed: a builder internal must be missing from the prefix.
 # Inputs: REBRAID_BUILD_DIR, REBRAID_SOURCE_DIR, REBRAID_WORK_DIR, REBRAID_GENERATOR.
 foreach(variable REBRAID_BUILD_DIR REBRAID_SOURCE_DIR REBRAID_WORK_DIR REBRAID_GENERATOR)
@@ -33,7 +33,7 @@ endfunction()
 run("install" ${CMAKE_COMMAND} --install ${REBRAID_BUILD_DIR} --prefix ${prefix})
 foreach(installed include/rebraid/embree.h include/rebraid/rebraid.h include/rebraid/core/scene.h
         include/rebraid/rebraiding/rebraid_accel.h include/embree_glue/dropin/embree_accel.h
-        lib/cmake/rebraid/rebraidConfig.cmake bin/rebraid)
+        lib/cmake/rebraid/rebraidConfig.cmake bin/rebraid lib/librebraid_preload.so)
     if(NOT EXISTS ${prefix}/${installed})
         message(FATAL_ERROR "install: ${prefix}/${installed} is missing")
     endif()

@@ -1,15 +1,14 @@
 #include "embree_glue/dropin/embree_interposer.h"
 
-#include <dlfcn.h>
 #include <embree3/rtcore.h>
 
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <optional>
-#include <type_traits>
-#include <utility>
 
 #include "embree_glue/dropin/embree_interposer_registry.h"
+#include "embree_glue/dropin/embree_next_definition.h"
 
 extern "C" {
 int rebraid_embree_interposer_anchor = 0;
@@ -18,26 +17,6 @@ int rebraid_embree_interposer_anchor = 0;
 namespace {
 
 using namespace rebraid::glue;
-
-/// The next definition of `name` after this executable's: libembree3's.
-template <typename Function>
-Function* next_definition(const char* name) {
-    return reinterpret_cast<Function*>(dlsym(RTLD_NEXT, name));
-}
-
-/// Calls the real function. Should Embree not be found (it is a dependency of the drop-in
-/// target, so only a broken link can cause that), behaves like a call Embree refused: a
-/// null or zero result and no effect.
-template <typename Result, typename... Parameters, typename... Arguments>
-Result call_real(Result (*function)(Parameters...), Arguments&&... arguments) {
-    if (function == nullptr) {
-        if constexpr (std::is_void_v<Result>)
-            return;
-        else
-            return Result{};
-    }
-    return function(std::forward<Arguments>(arguments)...);
-}
 
 /// Runs a registry update; an exception (out of memory) must not cross into the
 /// application's C frames, so it is recorded instead (EmbreeAccel then refuses to build).
@@ -75,6 +54,8 @@ bool to_column_major(RTCFormat format, const float* xfm, std::array<float, 12>& 
     return true;
 }
 
+std::atomic<InterposerObserver*> g_observer{nullptr};
+
 RegisteredBufferView make_view(BufferSource source, RTCFormat format, const void* base,
                                std::size_t byte_offset, std::size_t byte_stride,
                                std::size_t item_count, RTCBuffer buffer) {
@@ -90,6 +71,10 @@ RegisteredBufferView make_view(BufferSource source, RTCFormat format, const void
 }
 
 }  // namespace
+
+void rebraid::glue::set_interposer_observer(InterposerObserver* observer) noexcept {
+    g_observer.store(observer, std::memory_order_release);
+}
 
 // Each definition: forward, then record. Releases record first, while the handle is still
 // alive, so a handle Embree reuses at once cannot be confused with the released one.
@@ -113,6 +98,8 @@ void rtcRetainScene(RTCScene scene) {
 
 void rtcReleaseScene(RTCScene scene) {
     static auto* const real = next_definition<decltype(rtcReleaseScene)>("rtcReleaseScene");
+    if (InterposerObserver* observer = g_observer.load(std::memory_order_acquire))
+        observer->scene_releasing(scene);
     call_real(real, scene);
     record([&] { registry::on_release_scene(scene); });
 }
@@ -121,12 +108,16 @@ void rtcCommitScene(RTCScene scene) {
     static auto* const real = next_definition<decltype(rtcCommitScene)>("rtcCommitScene");
     call_real(real, scene);
     record([&] { registry::on_commit_scene(scene); });
+    if (InterposerObserver* observer = g_observer.load(std::memory_order_acquire))
+        observer->scene_committed(scene, false);
 }
 
 void rtcJoinCommitScene(RTCScene scene) {
     static auto* const real = next_definition<decltype(rtcJoinCommitScene)>("rtcJoinCommitScene");
     call_real(real, scene);
     record([&] { registry::on_commit_scene(scene); });
+    if (InterposerObserver* observer = g_observer.load(std::memory_order_acquire))
+        observer->scene_committed(scene, true);
 }
 
 unsigned int rtcAttachGeometry(RTCScene scene, RTCGeometry geometry) {

@@ -12,6 +12,10 @@
 // interposer never reads or clears the device error.
 //
 // Ray queries (rtcIntersect*, rtcOccluded*) are not interposed: tracing costs nothing extra.
+// The preload library (embree_glue/preload/) defines them in addition, and learns of commits
+// and releases through an InterposerObserver.
+
+#include <embree3/rtcore.h>
 
 extern "C" {
 /// Defined in the interposer's object. The drop-in target passes
@@ -20,3 +24,21 @@ extern "C" {
 /// definitions win even when an application lists libembree3 first.
 extern int rebraid_embree_interposer_anchor;
 }
+
+namespace rebraid::glue {
+
+/// Told of the scene calls that change what a structure built from a scene may answer.
+class InterposerObserver {
+public:
+    virtual ~InterposerObserver() = default;
+    /// After rtcCommitScene or rtcJoinCommitScene (`is_join`: every thread that joined the
+    /// commit returns from it, at different times) returned and the registry recorded it.
+    virtual void scene_committed(RTCScene scene, bool is_join) noexcept = 0;
+    /// Before rtcReleaseScene is forwarded (the scene and its record are still alive).
+    virtual void scene_releasing(RTCScene scene) noexcept = 0;
+};
+
+/// Installs `observer` (null: none), which must outlive every later Embree call.
+void set_interposer_observer(InterposerObserver* observer) noexcept;
+
+}  // namespace rebraid::glue

@@ -9,6 +9,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "embree_glue/dropin/never_destroyed.h"
+
 namespace rebraid::glue {
 namespace {
 
@@ -23,18 +25,6 @@ struct Registry {
     std::pmr::unordered_map<RTCScene, RegisteredScene> scenes{&pool};
     std::pmr::unordered_map<RTCGeometry, RegisteredGeometry> geometries{&pool};
     std::pmr::unordered_map<RTCBuffer, RegisteredBuffer> buffers{&pool};
-};
-
-/// Storage that is never destroyed: the application may release Embree objects from its own
-/// static destructors, which can run after a function-local static registry would be gone.
-template <typename T>
-class NeverDestroyed {
-public:
-    NeverDestroyed() { std::construct_at(reinterpret_cast<T*>(storage_)); }
-    T& get() { return *std::launder(reinterpret_cast<T*>(storage_)); }
-
-private:
-    alignas(T) std::byte storage_[sizeof(T)];
 };
 
 Registry& registry_instance() {

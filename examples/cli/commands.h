@@ -46,5 +46,6 @@ void add_rays_command(CLI::App& app, CommonOptions& common, CommandAction& actio
 void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 void add_generate_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 void add_animate_command(CLI::App& app, CommonOptions& common, CommandAction& action);
+void add_export_command(CLI::App& app, CommonOptions& common, CommandAction& action);
 
 }  // namespace rebraid::cli

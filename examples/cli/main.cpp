@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
     add_bench_command(app, common, action);
     add_generate_command(app, common, action);
     add_animate_command(app, common, action);
+    add_export_command(app, common, action);
 
     try {
         app.parse(argc, argv);

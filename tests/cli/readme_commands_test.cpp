@@ -40,6 +40,13 @@ const std::map<std::string, std::string> kCommandsTestedElsewhere{
      "InstallPackage.OutsideProjectBuildsAndRuns"},
     {"cmake --build build-dropin-example && ./build-dropin-example/dropin_example --check",
      "InstallPackage.OutsideProjectBuildsAndRuns"},
+    {"viewer -i out/brainstem/scene.xml -c out/brainstem/camera.cfg --instancing geometry -o "
+     "out/embree.ppm",
+     "SlowEmbreeTools.ViewersRenderTheExportedSharedScenesTheSame"},
+    {"LD_PRELOAD=$PWD/build/lib/librebraid_preload.so REBRAID_PRELOAD_LOG=1 viewer -i "
+     "out/brainstem/scene.xml -c out/brainstem/camera.cfg --instancing geometry -o "
+     "out/rebraid.ppm",
+     "SlowEmbreeTools.ViewersRenderTheExportedSharedScenesTheSame"},
 };
 
 /// Every line of README.md's ```sh blocks, in order.

@@ -1,0 +1,167 @@
+#include "embree_glue/preload/preload_scenes.h"
+
+#include <cstdio>
+#include <exception>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "embree_glue/dropin/embree_interposer_registry.h"
+#include "rebraid/core/build_timer.h"
+#include "rebraid/core/error.h"
+
+namespace rebraid::glue {
+namespace {
+
+/// The last answer of this thread. The library is loaded at start (LD_PRELOAD), so its
+/// thread-local storage is static and read without a call.
+struct LastAnswer {
+    RTCScene scene = nullptr;
+    std::uint64_t generation = 0;
+    ServedScene served;
+};
+thread_local LastAnswer t_last_answer __attribute__((tls_model("initial-exec")));
+
+/// Throws rebraid::Error when a scene the structure would cover asks Embree for robust
+/// intersection, whose hits at edges and vertices the structure does not reproduce.
+void check_scene_flags(RTCScene scene) {
+    const std::optional<RegisteredSceneSnapshot> snapshot = snapshot_registered_scene(scene);
+    if (!snapshot) return;  // EmbreeAccel says why it cannot serve the scene
+    for (const auto& [each, record] : snapshot->scenes)
+        if ((rtcGetSceneFlags(each) & RTC_SCENE_FLAG_ROBUST) != 0)
+            throw Error(each == scene ? "the scene has RTC_SCENE_FLAG_ROBUST"
+                                      : "an instanced scene has RTC_SCENE_FLAG_ROBUST");
+}
+
+std::size_t instanced_triangle_count(const Scene& scene) {
+    std::size_t count = 0;
+    for (const Instance& instance : scene.instances)
+        count += scene.meshes[instance.mesh_id].triangles.size();
+    return count;
+}
+
+std::string describe_structure(const EmbreeAccel& accel, double ms) {
+    const Scene& scene = accel.converted_scene().scene;
+    char text[160];
+    std::snprintf(text, sizeof text, "%.1f ms, %zu instances, %zu triangles", ms,
+                  scene.instances.size(), instanced_triangle_count(scene));
+    return text;
+}
+
+}  // namespace
+
+PreloadScenes::PreloadScenes(PreloadSettings settings) : settings_(std::move(settings)) {}
+
+PreloadScenes::~PreloadScenes() = default;
+
+ServedScene PreloadScenes::served(RTCScene scene) noexcept {
+    const LastAnswer& last = t_last_answer;
+    if (last.scene == scene && last.generation == generation_.load(std::memory_order_acquire))
+        return last.served;
+    return served_after_commit(scene);
+}
+
+ServedScene PreloadScenes::served_after_commit(RTCScene scene) noexcept {
+    SceneState* state = nullptr;
+    std::shared_ptr<tbb::collaborative_once_flag> decision;
+    std::uint64_t generation = 0;
+    {
+        const std::lock_guard lock(mutex_);
+        generation = generation_.load(std::memory_order_relaxed);
+        const auto found = scenes_.find(scene);
+        if (found != scenes_.end()) {
+            state = &found->second;
+            decision = state->decision;
+        }
+    }
+    ServedScene served;
+    if (state != nullptr) {
+        // The record stays: only the scene's release or commit, during which the application
+        // may not trace it, changes or erases it.
+        tbb::collaborative_call_once(*decision, [&] { decide(scene, *state); });
+        if (state->is_served) served = {state->accel.get()};
+    }
+    t_last_answer = {scene, generation, served};
+    return served;
+}
+
+void PreloadScenes::decide(RTCScene scene, SceneState& state) noexcept {
+    if (!settings_.is_enabled) return;
+    const BuildTimer timer;
+    std::unique_ptr<EmbreeAccel> built;
+    std::unique_ptr<EmbreeAccel> discarded;
+    std::string message;
+    bool is_served = false;
+    try {
+        if (state.is_join_committed)
+            throw Error("committed with rtcJoinCommitScene, which rebraid leaves to Embree");
+        check_scene_flags(scene);
+        if (state.accel) {
+            state.accel->update();
+            message = "rebraid serves it (updated: ";
+        } else {
+            built = std::make_unique<EmbreeAccel>(scene, settings_.accel);
+            message = "rebraid serves it (build ";
+        }
+        is_served = true;
+    } catch (const std::exception& error) {
+        message = std::string("Embree serves it: ") + error.what();
+    }
+    {
+        const std::lock_guard lock(mutex_);
+        if (built) state.accel = std::move(built);
+        if (!is_served) discarded = std::move(state.accel);
+        state.is_served = is_served;
+    }
+    if (is_served) message += describe_structure(*state.accel, timer.elapsed_ms()) + ")";
+    log(scene, message);
+    // `discarded` releases its reference to the scene here, outside the lock (the release
+    // comes back through scene_releasing).
+}
+
+void PreloadScenes::scene_committed(RTCScene scene, bool is_join) noexcept {
+    try {
+        auto decision = std::make_shared<tbb::collaborative_once_flag>();
+        const std::lock_guard lock(mutex_);
+        SceneState& state = scenes_[scene];
+        state.decision = std::move(decision);
+        state.is_join_committed = is_join;
+        generation_.fetch_add(1, std::memory_order_release);
+    } catch (...) {
+        // Out of memory: Embree answers the scene from now on.
+        const std::lock_guard lock(mutex_);
+        scenes_.erase(scene);
+        generation_.fetch_add(1, std::memory_order_release);
+    }
+}
+
+void PreloadScenes::scene_releasing(RTCScene scene) noexcept {
+    std::unique_ptr<EmbreeAccel> released;
+    {
+        const std::lock_guard lock(mutex_);
+        const auto found = scenes_.find(scene);
+        if (found == scenes_.end()) return;
+        const std::optional<RegisteredScene> record = find_registered_scene(scene);
+        // The structure holds one reference of its own (EmbreeAccel retains its scene).
+        const std::uint32_t own_refs = found->second.accel ? 1 : 0;
+        const bool is_last_reference = !record || record->application_refs <= own_refs + 1;
+        if (!is_last_reference) return;
+        released = std::move(found->second.accel);
+        scenes_.erase(found);
+        generation_.fetch_add(1, std::memory_order_release);
+    }
+    // `released` lets go of its reference here, outside the lock; that release finds no record.
+}
+
+std::size_t PreloadScenes::scene_count() const {
+    const std::lock_guard lock(mutex_);
+    return scenes_.size();
+}
+
+void PreloadScenes::log(RTCScene scene, const std::string& message) const {
+    if (!settings_.is_logging) return;
+    std::fprintf(stderr, "rebraid preload: scene %p: %s\n", static_cast<const void*>(scene),
+                 message.c_str());
+}
+
+}  // namespace rebraid::glue
