@@ -15,7 +15,13 @@
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
-inline Hit flat_intersect(const FlatAccel& accel, const Ray& ray, TraversalCounters* counters) {
+// The four entry points are flattened (every call inside them inlined): in one unit with all
+// four, the compiler's unit-growth limits otherwise leave the traversal loops out of line and
+// its register allocation worse, 8-15 % more instructions per ray than each query compiled
+// alone (callgrind, diffuse rays of fzk_haus and cg57_cruiser).
+
+[[gnu::flatten]] inline Hit flat_intersect(const FlatAccel& accel, const Ray& ray,
+                                           TraversalCounters* counters) {
     Hit hit;
     PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
@@ -37,7 +43,7 @@ inline Hit flat_intersect(const FlatAccel& accel, const Ray& ray, TraversalCount
     return hit;
 }
 
-inline bool flat_occluded(const FlatAccel& accel, const Ray& ray) {
+[[gnu::flatten]] inline bool flat_occluded(const FlatAccel& accel, const Ray& ray) {
     PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     return occluded_object_bvh(accel.bvh(), accel.bvh().root, traversal_ray, nullptr);
 }
@@ -88,8 +94,8 @@ inline void prefetch_item_target(const InstancedAccel& accel, NodeRef leaf) {
         prefetch_node(bvh.nodes.data(), item.object_node);
 }
 
-inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
-                               TraversalCounters* counters) {
+[[gnu::flatten]] inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
+                                                TraversalCounters* counters) {
     Hit hit;
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray, accel);
@@ -117,7 +123,7 @@ inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
     return hit;
 }
 
-inline bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
+[[gnu::flatten]] inline bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray, accel);
     const TopLevelBvh& top = accel.top_level();
