@@ -51,7 +51,7 @@ from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENE
                         commit_info, load_average, machine_info, relative_to_repo, repo_path,
                         run, run_json, scene_name)
 
-SUITES = ["structures", "scenes", "generated", "animate"]
+SUITES = ["structures", "scenes", "generated", "animate", "instructions"]
 # The structures whose SAH and structure_hash the `structures` suite records.
 STRUCTURE_ACCELS = ["flat", "twolevel", "rebraid"]
 GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
@@ -64,8 +64,13 @@ TMP = "TMP"
 # Ray counts (230400 = a 640x360 image; as many diffuse rays), timed repetitions per process
 # and animation frames: a full collection (all suites, 5 rounds) takes ~30 minutes on 2 cores.
 # --quick only checks that the pipeline runs.
-FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": []}
-QUICK = {"rays": 2000, "repetitions": 1, "frames": 2, "animate": ["--width", "64", "--height", "36"]}
+# `instructions` counts 10,000 rays of each kind (valgrind is ~50x slower; --quick: the default
+# scene alone).
+FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": [],
+        "instruction_rays": 10000, "instruction_scenes": "all"}
+QUICK = {"rays": 2000, "repetitions": 1, "frames": 2, "animate": ["--width", "64", "--height", "36"],
+         "instruction_rays": 200, "instruction_scenes": "default"}
+COUNT_INSTRUCTIONS = "bench/tools/count_instructions.py"
 
 
 def shared_scenes():
@@ -117,6 +122,11 @@ def animate_command(static, dynamic, settings, threads):
     return argv + (["--threads", str(threads)] if threads is not None else [])
 
 
+def generate_command(kind, threads):
+    argv = [BINARY, "generate", kind, "-o", f"{TMP}/{kind}.glb"]
+    return argv + (["--threads", str(threads)] if threads is not None else [])
+
+
 def jobs_of(suite, settings, threads):
     """The suite's (name, argv, setup argvs) triples; argv may name files under TMP/."""
     if suite == "structures":
@@ -131,12 +141,17 @@ def jobs_of(suite, settings, threads):
         return [(scene_name(s), bench_command(s, settings, threads), [])
                 for s in ["default"] + shared_scenes()]
     if suite == "generated":
-        jobs = []
-        for kind in GENERATED_KINDS:
-            generate = [BINARY, "generate", kind, "-o", f"{TMP}/{kind}.glb"]
-            if threads is not None:
-                generate += ["--threads", str(threads)]
-            jobs.append((kind, bench_command(f"{TMP}/{kind}.glb", settings, threads), [generate]))
+        return [(kind, bench_command(f"{TMP}/{kind}.glb", settings, threads),
+                 [generate_command(kind, threads)]) for kind in GENERATED_KINDS]
+    if suite == "instructions":
+        def count(scene):
+            return ["python3", COUNT_INSTRUCTIONS, scene, "--rays",
+                    str(settings["instruction_rays"]), "--jobs", "2"]
+        jobs = [("default", count("default"), [])]
+        if settings["instruction_scenes"] == "all":
+            jobs += [(scene_name(s), count(s), []) for s in shared_scenes()]
+            jobs += [(kind, count(f"{TMP}/{kind}.glb"), [generate_command(kind, threads)])
+                     for kind in GENERATED_KINDS]
         return jobs
     if suite == "animate":
         jobs = [("default", animate_command(None, None, settings, threads), [])]
@@ -150,6 +165,18 @@ def jobs_of(suite, settings, threads):
 
 def substitute(argv, tmp):
     return [a.replace(f"{TMP}/", tmp + "/", 1) if a.startswith(f"{TMP}/") else a for a in argv]
+
+
+def unsubstitute(value, tmp):
+    """`value` (parsed JSON) with the temporary folder written as TMP again, as the commands
+    are recorded."""
+    if isinstance(value, str):
+        return value.replace(tmp + "/", f"{TMP}/")
+    if isinstance(value, list):
+        return [unsubstitute(v, tmp) for v in value]
+    if isinstance(value, dict):
+        return {k: unsubstitute(v, tmp) for k, v in value.items()}
+    return value
 
 
 def utc_now():
@@ -225,14 +252,14 @@ def main():
             for _, _, setup in jobs:
                 for argv in setup:
                     run(substitute(argv, tmp))
-            # Structures are deterministic: one round says all.
-            suite_rounds = 1 if suite == "structures" else rounds
+            # Structures and instruction counts are deterministic: one round says all.
+            suite_rounds = 1 if suite in ("structures", "instructions") else rounds
             for round_index in range(1, suite_rounds + 1):
                 for order, (name, argv, setup) in enumerate(jobs):
                     load = load_average()
                     date = utc_now()
                     job_start = time.monotonic()
-                    output = run_json(substitute(argv, tmp))
+                    output = unsubstitute(run_json(substitute(argv, tmp)), tmp)
                     result = {
                         "name": name,
                         "suite": suite,
