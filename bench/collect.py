@@ -21,6 +21,13 @@ Suites (every command runs from the repository root):
   animate    `rebraid animate --json`: the built-in twisting object in the default scene, and
              each animated shared scene (per ../shared/scenes/MANIFEST.md) as --dynamic in
              ../shared/scenes/cg57_cruiser.glb
+  instructions
+             `python3 bench/tools/count_instructions.py SCENE`: exact instructions per primary
+             and per diffuse ray (closest hit + occluded, callgrind) of embree-flat,
+             embree-instanced, flat, twolevel and rebraid on 10,000 rays of each kind, for the
+             default scene, every shared scene and the generated kinds (deterministic, so one
+             round; needs valgrind and build/bench/trace_rays, without which a run of every
+             suite skips it; --quick: the default scene alone on 200 rays)
 
 A round runs every command of a suite once, each as its own process on the same rays and
 seeds; --rounds K repeats that K times (report.py prints medians over the rounds). Each
@@ -34,7 +41,12 @@ held about one core: one round takes about 1 min for `scenes`, 2 min for `genera
 trees and powerplant) and 3 min for `animate` (20 frames of 640x360 primary and diffuse rays
 for 15 methods, 4 runs), so the full default collection (all suites, 5 rounds) takes about
 30 minutes, and less on an idle machine. Run it on an otherwise idle
-machine: the builds and the rays use every core.
+machine: the builds and the rays use every core. The `instructions` suite counts rather than
+times, so any machine load leaves its results as they are (it only runs longer): one round
+took 14 minutes on the shared machine (10 to 20 s for each shared scene, 1.3 min for the
+default scene, 5 min for trees and 4 min for powerplant, whose builds over millions of
+triangles valgrind emulates slowly), which brings the full default collection to about 45 minutes; its --quick part (the
+default scene) adds about 1.3 minutes.
 """
 import argparse
 import datetime
@@ -47,7 +59,7 @@ import sys
 import tempfile
 import time
 
-from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENES,
+from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENES, TRACER,
                         commit_info, load_average, machine_info, relative_to_repo, repo_path,
                         run, run_json, scene_name)
 
@@ -62,13 +74,14 @@ ANIMATED_FALLBACK = ["brainstem", "motion_capture_rom", "animated_morph_cube"]
 TMP = "TMP"
 
 # Ray counts (230400 = a 640x360 image; as many diffuse rays), timed repetitions per process
-# and animation frames: a full collection (all suites, 5 rounds) takes ~30 minutes on 2 cores.
+# and animation frames: a full collection (all suites, 5 rounds) takes ~45 minutes on 2 cores.
 # --quick only checks that the pipeline runs.
 # `instructions` counts 10,000 rays of each kind (valgrind is ~50x slower; --quick: the default
 # scene alone).
 FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": [],
         "instruction_rays": 10000, "instruction_scenes": "all"}
-QUICK = {"rays": 2000, "repetitions": 1, "frames": 2, "animate": ["--width", "64", "--height", "36"],
+QUICK = {"rays": 2000, "repetitions": 1, "frames": 2,
+         "animate": ["--width", "64", "--height", "36"],
          "instruction_rays": 200, "instruction_scenes": "default"}
 COUNT_INSTRUCTIONS = "bench/tools/count_instructions.py"
 
@@ -213,6 +226,13 @@ def main():
     if not os.path.exists(repo_path(BINARY)):
         sys.exit(f"collect.py: {BINARY} is missing: build the project first")
     suites = args.suite or SUITES
+    if "instructions" in suites and not (shutil.which("valgrind")
+                                         and os.path.exists(repo_path(TRACER))):
+        missing = f"valgrind or {TRACER} (build the target trace_rays) is missing"
+        if args.suite:
+            sys.exit(f"collect.py: suite instructions: {missing}")
+        print(f"collect.py: skipping suite instructions: {missing}", file=sys.stderr)
+        suites = [s for s in suites if s != "instructions"]
 
     # The command as recorded: the options that shape the results, paths relative to the
     # repository root (an output folder outside it is not recorded).

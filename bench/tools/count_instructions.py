@@ -16,9 +16,10 @@ and the exact commands (WORK stands for the temporary folder).
 
 The count is exact and the same on every run and machine load. valgrind emulates no AVX-512,
 so Embree picks its AVX2 kernels and the project's structures theirs: both sides compare at
-AVX2. Time: valgrind runs about 50 times slower than the native code and the builds dominate;
-about 1 minute for a shared scene and 4 for the generated `trees` (10 million triangles,
-whose embree-flat build alone takes 4 minutes) with 10,000 rays of each kind on 2 cores.
+AVX2. Time: valgrind runs about 50 times slower than the native code and the builds dominate.
+With 10,000 rays of each kind and --jobs 2 on 2 cores: 10 to 20 s for a shared scene, 1.3 min
+for the default scene and 5 min for the generated `trees` (10 million triangles, whose
+embree-flat build alone takes 4 minutes under valgrind).
 
 Python 3.11 standard library only.
 """
@@ -33,9 +34,9 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from results_io import BINARY, DEFAULT_ACCELS, repo_path, run, scene_name  # noqa: E402
+from results_io import (BINARY, DEFAULT_ACCELS, TRACER, repo_path, run,  # noqa: E402
+                        scene_name)
 
-TRACER = "build/bench/trace_rays"
 # The structures trace_rays builds.
 ACCELS = DEFAULT_ACCELS
 KINDS = ["primary", "diffuse"]
