@@ -21,6 +21,13 @@ Suites (every command runs from the repository root):
   animate    `rebraid animate --json`: the built-in twisting object in the default scene, and
              each animated shared scene (per ../shared/scenes/MANIFEST.md) as --dynamic in
              ../shared/scenes/cg57_cruiser.glb
+  instructions
+             `python3 bench/tools/count_instructions.py SCENE`: exact instructions per primary
+             and per diffuse ray (closest hit + occluded, callgrind) of embree-flat,
+             embree-instanced, flat, twolevel and rebraid on 10,000 rays of each kind, for the
+             default scene, every shared scene and the generated kinds (deterministic, so one
+             round; needs valgrind and build/bench/trace_rays, without which a run of every
+             suite skips it; --quick: the default scene alone on 200 rays)
 
 A round runs every command of a suite once, each as its own process on the same rays and
 seeds; --rounds K repeats that K times (report.py prints medians over the rounds). Each
@@ -34,7 +41,12 @@ held about one core: one round takes about 1 min for `scenes`, 2 min for `genera
 trees and powerplant) and 3 min for `animate` (20 frames of 640x360 primary and diffuse rays
 for 15 methods, 4 runs), so the full default collection (all suites, 5 rounds) takes about
 30 minutes, and less on an idle machine. Run it on an otherwise idle
-machine: the builds and the rays use every core.
+machine: the builds and the rays use every core. The `instructions` suite counts rather than
+times, so any machine load leaves its results as they are (it only runs longer): one round
+took 14 minutes on the shared machine (10 to 20 s for each shared scene, 1.3 min for the
+default scene, 5 min for trees and 4 min for powerplant, whose builds over millions of
+triangles valgrind emulates slowly), which brings the full default collection to about 45 minutes; its --quick part (the
+default scene) adds about 1.3 minutes.
 """
 import argparse
 import datetime
@@ -47,11 +59,11 @@ import sys
 import tempfile
 import time
 
-from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENES,
+from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENES, TRACER,
                         commit_info, load_average, machine_info, relative_to_repo, repo_path,
                         run, run_json, scene_name)
 
-SUITES = ["structures", "scenes", "generated", "animate"]
+SUITES = ["structures", "scenes", "generated", "animate", "instructions"]
 # The structures whose SAH and structure_hash the `structures` suite records.
 STRUCTURE_ACCELS = ["flat", "twolevel", "rebraid"]
 GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
@@ -62,10 +74,16 @@ ANIMATED_FALLBACK = ["brainstem", "motion_capture_rom", "animated_morph_cube"]
 TMP = "TMP"
 
 # Ray counts (230400 = a 640x360 image; as many diffuse rays), timed repetitions per process
-# and animation frames: a full collection (all suites, 5 rounds) takes ~30 minutes on 2 cores.
+# and animation frames: a full collection (all suites, 5 rounds) takes ~45 minutes on 2 cores.
 # --quick only checks that the pipeline runs.
-FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": []}
-QUICK = {"rays": 2000, "repetitions": 1, "frames": 2, "animate": ["--width", "64", "--height", "36"]}
+# `instructions` counts 10,000 rays of each kind (valgrind is ~50x slower; --quick: the default
+# scene alone).
+FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": [],
+        "instruction_rays": 10000, "instruction_scenes": "all"}
+QUICK = {"rays": 2000, "repetitions": 1, "frames": 2,
+         "animate": ["--width", "64", "--height", "36"],
+         "instruction_rays": 200, "instruction_scenes": "default"}
+COUNT_INSTRUCTIONS = "bench/tools/count_instructions.py"
 
 
 def shared_scenes():
@@ -117,6 +135,11 @@ def animate_command(static, dynamic, settings, threads):
     return argv + (["--threads", str(threads)] if threads is not None else [])
 
 
+def generate_command(kind, threads):
+    argv = [BINARY, "generate", kind, "-o", f"{TMP}/{kind}.glb"]
+    return argv + (["--threads", str(threads)] if threads is not None else [])
+
+
 def jobs_of(suite, settings, threads):
     """The suite's (name, argv, setup argvs) triples; argv may name files under TMP/."""
     if suite == "structures":
@@ -131,12 +154,17 @@ def jobs_of(suite, settings, threads):
         return [(scene_name(s), bench_command(s, settings, threads), [])
                 for s in ["default"] + shared_scenes()]
     if suite == "generated":
-        jobs = []
-        for kind in GENERATED_KINDS:
-            generate = [BINARY, "generate", kind, "-o", f"{TMP}/{kind}.glb"]
-            if threads is not None:
-                generate += ["--threads", str(threads)]
-            jobs.append((kind, bench_command(f"{TMP}/{kind}.glb", settings, threads), [generate]))
+        return [(kind, bench_command(f"{TMP}/{kind}.glb", settings, threads),
+                 [generate_command(kind, threads)]) for kind in GENERATED_KINDS]
+    if suite == "instructions":
+        def count(scene):
+            return ["python3", COUNT_INSTRUCTIONS, scene, "--rays",
+                    str(settings["instruction_rays"]), "--jobs", "2"]
+        jobs = [("default", count("default"), [])]
+        if settings["instruction_scenes"] == "all":
+            jobs += [(scene_name(s), count(s), []) for s in shared_scenes()]
+            jobs += [(kind, count(f"{TMP}/{kind}.glb"), [generate_command(kind, threads)])
+                     for kind in GENERATED_KINDS]
         return jobs
     if suite == "animate":
         jobs = [("default", animate_command(None, None, settings, threads), [])]
@@ -150,6 +178,18 @@ def jobs_of(suite, settings, threads):
 
 def substitute(argv, tmp):
     return [a.replace(f"{TMP}/", tmp + "/", 1) if a.startswith(f"{TMP}/") else a for a in argv]
+
+
+def unsubstitute(value, tmp):
+    """`value` (parsed JSON) with the temporary folder written as TMP again, as the commands
+    are recorded."""
+    if isinstance(value, str):
+        return value.replace(tmp + "/", f"{TMP}/")
+    if isinstance(value, list):
+        return [unsubstitute(v, tmp) for v in value]
+    if isinstance(value, dict):
+        return {k: unsubstitute(v, tmp) for k, v in value.items()}
+    return value
 
 
 def utc_now():
@@ -186,6 +226,13 @@ def main():
     if not os.path.exists(repo_path(BINARY)):
         sys.exit(f"collect.py: {BINARY} is missing: build the project first")
     suites = args.suite or SUITES
+    if "instructions" in suites and not (shutil.which("valgrind")
+                                         and os.path.exists(repo_path(TRACER))):
+        missing = f"valgrind or {TRACER} (build the target trace_rays) is missing"
+        if args.suite:
+            sys.exit(f"collect.py: suite instructions: {missing}")
+        print(f"collect.py: skipping suite instructions: {missing}", file=sys.stderr)
+        suites = [s for s in suites if s != "instructions"]
 
     # The command as recorded: the options that shape the results, paths relative to the
     # repository root (an output folder outside it is not recorded).
@@ -225,14 +272,14 @@ def main():
             for _, _, setup in jobs:
                 for argv in setup:
                     run(substitute(argv, tmp))
-            # Structures are deterministic: one round says all.
-            suite_rounds = 1 if suite == "structures" else rounds
+            # Structures and instruction counts are deterministic: one round says all.
+            suite_rounds = 1 if suite in ("structures", "instructions") else rounds
             for round_index in range(1, suite_rounds + 1):
                 for order, (name, argv, setup) in enumerate(jobs):
                     load = load_average()
                     date = utc_now()
                     job_start = time.monotonic()
-                    output = run_json(substitute(argv, tmp))
+                    output = unsubstitute(run_json(substitute(argv, tmp)), tmp)
                     result = {
                         "name": name,
                         "suite": suite,

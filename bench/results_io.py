@@ -15,6 +15,8 @@ BENCH_DIR = os.path.dirname(os.path.abspath(__file__))
 REPO_ROOT = os.path.dirname(BENCH_DIR)
 # Paths are given relative to the repository root: commands run from there and are recorded so.
 BINARY = "build/examples/rebraid"
+# The tracing program that bench/tools/count_instructions.py runs under callgrind.
+TRACER = "build/bench/trace_rays"
 SHARED_SCENES = "../shared/scenes"
 RESULTS_DIR = "bench/results"
 

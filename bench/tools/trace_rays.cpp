@@ -1,9 +1,11 @@
-// trace_rays SCENE RAYS ACCEL: builds one structure over a glTF scene (or `default`), traces
-// a ray file through it on one thread and prints what it found. A deterministic workload for
-// instruction counts, free of the libraries the `rebraid` command links for images (which
-// valgrind cannot run):
+// trace_rays SCENE RAYS... ACCEL: builds one structure over a glTF scene (or `default`),
+// traces each ray file through it on one thread (one trace_all call per file, in order) and
+// prints what it found, one line per file. A deterministic workload for instruction counts,
+// free of the libraries the `rebraid` command links for images (which valgrind cannot run):
 //   valgrind --tool=callgrind --toggle-collect='*trace_all*' ./build/bench/trace_rays SCENE
 //       RAYS ACCEL
+// With several ray files, --dump-after='*trace_all*' writes one profile per file, so one
+// build (emulated slowly by valgrind) serves them all (bench/tools/count_instructions.py).
 // ACCEL: flat, twolevel, rebraid, embree-flat or embree-instanced.
 #include <cstdio>
 #include <memory>
@@ -51,19 +53,24 @@ struct TraceSummary {
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc != 4) {
-        std::fprintf(stderr, "usage: trace_rays SCENE|default RAYS ACCEL\n");
+    if (argc < 4) {
+        std::fprintf(stderr, "usage: trace_rays SCENE|default RAYS... ACCEL\n");
         return 1;
     }
     try {
         const std::string scene_path = argv[1];
         const rebraid::Scene scene = scene_path == "default" ? rebraid::make_default_scene()
                                                              : rebraid::load_gltf_scene(scene_path);
-        const std::vector<rebraid::Ray> rays = rebraid::read_ray_file(argv[2]);
-        const std::unique_ptr<rebraid::Accel> accel = build(argv[3], scene);
-        const TraceSummary summary = trace_all(*accel, rays);
-        std::printf("%zu rays, %zu hits, %zu occluded, t sum %.9g\n", rays.size(), summary.hits,
-                    summary.occluded, summary.t_sum);
+        // Every ray file is read before the build, so a bad one fails at once.
+        std::vector<std::vector<rebraid::Ray>> ray_sets;
+        for (int file = 2; file < argc - 1; ++file)
+            ray_sets.push_back(rebraid::read_ray_file(argv[file]));
+        const std::unique_ptr<rebraid::Accel> accel = build(argv[argc - 1], scene);
+        for (const std::vector<rebraid::Ray>& rays : ray_sets) {
+            const TraceSummary summary = trace_all(*accel, rays);
+            std::printf("%zu rays, %zu hits, %zu occluded, t sum %.9g\n", rays.size(), summary.hits,
+                        summary.occluded, summary.t_sum);
+        }
     } catch (const std::exception& error) {
         std::fprintf(stderr, "trace_rays: %s\n", error.what());
         return 1;
