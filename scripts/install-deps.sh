@@ -7,7 +7,7 @@ packages=(
     libembree-dev libtbb-dev libopenimageio-dev openimageio-tools libtinygltf-dev nlohmann-json3-dev
     libdraco-dev libmeshoptimizer-dev
     libcli11-dev libgtest-dev libbenchmark-dev
-    python3 python3-matplotlib
+    python3 python3-matplotlib valgrind
     embree-tools
 )
 missing=()
