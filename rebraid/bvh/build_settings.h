@@ -12,13 +12,16 @@ namespace rebraid {
 struct BuildSettings {
     /// SAH bins per axis; more bins find better splits at a higher build cost.
     std::uint32_t bin_count = 32;
-    /// Leaves hold at most this many primitives (1..16); larger leaves build faster and
-    /// trace slower.
-    std::uint32_t max_leaf_size = 4;
+    /// Leaves hold at most this many primitives (1..16). 8 is one triangle group test
+    /// (rebraid/bvh/triangle_group.h), so a full leaf costs one test.
+    std::uint32_t max_leaf_size = 8;
     /// SAH cost of visiting a node, relative to `intersection_cost`.
     float traversal_cost = 1.0f;
-    /// SAH cost of one primitive test.
-    float intersection_cost = 1.0f;
+    /// SAH cost of one primitive test. A triangle costs far less than a node visit: the group
+    /// test handles 8 at once, and a leaf's triangles sit on one or two cache lines where a
+    /// node takes four. 0.3 traced fastest of 1, 0.5, 0.3 and 0.2 on the shared scenes
+    /// (docs/design.md, "Leaves"); top levels (max_leaf_size 1) never weigh it.
+    float intersection_cost = 0.3f;
     /// Ranges with fewer primitives are binned and partitioned serially, larger ones in
     /// parallel blocks. The prim order within the tree (and, through ties and index splits,
     /// rarely its shape) depends on this value; nothing depends on the thread count.
@@ -35,8 +38,10 @@ struct BuildSettings {
     /// within 0.02%; 4 costs up to 0.8% SAH.
     std::uint32_t prims_per_bin = 2;
     /// Fill wide nodes by also splitting children the binary SAH test would keep as leaves
-    /// (any child of more than one prim, largest first).
-    bool fill_nodes = true;
+    /// (any child of more than one prim, largest first). Off by default: with the SAH's
+    /// leaves of several triangles, splitting them only to fill slots traced a little slower
+    /// and built slower.
+    bool fill_nodes = false;
     /// Children per node, 2..kBvhWidth. Nodes keep kBvhWidth slots and the traversal tests
     /// all of them at once, so fewer children only make the tree deeper: a setting for
     /// measuring what the 8-wide layout buys (bench/bench_traversal.cpp's max_children).
