@@ -109,8 +109,15 @@ void PreloadScenes::decide(RTCScene scene, SceneState& state) noexcept {
     }
     {
         const std::lock_guard lock(mutex_);
-        if (built) state.accel = std::move(built);
-        if (!is_served) discarded = std::move(state.accel);
+        // Nothing is destroyed under the lock: a structure's destruction releases its scene,
+        // which comes back through scene_releasing and takes the lock. (A structure built by
+        // an earlier decision for the same scene can still be in place here.)
+        if (built) {
+            discarded = std::move(state.accel);
+            state.accel = std::move(built);
+        } else if (!is_served) {
+            discarded = std::move(state.accel);
+        }
         state.is_served = is_served;
     }
     if (is_served) message += describe_structure(*state.accel, timer.elapsed_ms()) + ")";
