@@ -25,4 +25,17 @@ struct ObjectBvh {
     std::uint64_t memory_bytes() const;
 };
 
+/// The arrays of an ObjectBvh a traversal reads, as bare pointers: what a two-level structure
+/// keeps per instance, so that entering one reads a single record (valid while the ObjectBvh
+/// lives and its arrays keep their size).
+struct ObjectBvhView {
+    const WideNode* nodes = nullptr;
+    const TriangleVerts* triangles = nullptr;  ///< leaf order
+    const PrimId* prim_ids = nullptr;          ///< leaf order -> triangle index in the mesh
+
+    ObjectBvhView() = default;
+    ObjectBvhView(const ObjectBvh& bvh)  // NOLINT: a view converts implicitly, as a span does
+        : nodes(bvh.nodes.data()), triangles(bvh.triangles.data()), prim_ids(bvh.prim_ids.data()) {}
+};
+
 }  // namespace rebraid

@@ -76,13 +76,13 @@ private:
 /// leaf order), so that the lookup's cache miss overlaps the rest of the traversal. (Asking
 /// for every visited leaf's ids instead cost more than the misses it hid.)
 template <class HitDataPrefetch = NoHitDataPrefetch>
-bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, PreparedRay& prepared,
+bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                      Hit& hit, TraversalCounters* counters,
                                      HitDataPrefetch&& prefetch_hit_data = {}) {
     TraversalRay& ray = prepared.ray;
     const TriangleGroupRay& group_ray = prepared.triangle_ray;
     bool found = false;
-    LeafTriangleLanes lanes(bvh.triangles.data());
+    LeafTriangleLanes lanes(bvh.triangles);
     const auto test_lanes = [&] {
         TriangleGroupHit group_hit;
         if (intersect_triangle_lanes(lanes.lanes(), lanes.count(), group_ray, ray.tnear, ray.tfar,
@@ -103,17 +103,17 @@ bool intersect_object_bvh_leaf_order(const ObjectBvh& bvh, NodeRef start, Prepar
         return false;
     };
     traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
-        bvh.nodes.data(), start, prepared, counters, visit_leaves);
+        bvh.nodes, start, prepared, counters, visit_leaves);
     return found;
 }
 
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
 /// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v/prim_id (mesh primID) and
 /// returns true; leaves hit.instance_id to the caller.
-inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, PreparedRay& ray, Hit& hit,
+inline bool intersect_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit,
                                  TraversalCounters* counters) {
     Hit leaf_order_hit = hit;
-    const PrimId* prim_ids = bvh.prim_ids.data();
+    const PrimId* prim_ids = bvh.prim_ids;
     const auto prefetch_prim_ids = [prim_ids](std::uint32_t position) {
         __builtin_prefetch(prim_ids + position);
     };
@@ -126,11 +126,11 @@ inline bool intersect_object_bvh(const ObjectBvh& bvh, NodeRef start, PreparedRa
 }
 
 /// True when any triangle below `start` is hit within [ray.tnear, ray.tfar].
-inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, PreparedRay& prepared,
+inline bool occluded_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                 TraversalCounters* counters) {
     const TraversalRay& ray = prepared.ray;
     const TriangleGroupRay& group_ray = prepared.triangle_ray;
-    LeafTriangleLanes lanes(bvh.triangles.data());
+    LeafTriangleLanes lanes(bvh.triangles);
     bool is_occluded = false;
     const auto test_lanes = [&] {
         is_occluded = is_occluded || occluded_triangle_lanes(lanes.lanes(), lanes.count(),
@@ -143,8 +143,8 @@ inline bool occluded_object_bvh(const ObjectBvh& bvh, NodeRef start, PreparedRay
     };
     // Any order: the first hit ends the query, and sorting the children costs more than the
     // nearer hits it would find first (measured on the shared scenes).
-    return traverse_bvh<TraversalOrder::any, LeafVisits::with_siblings>(
-        bvh.nodes.data(), start, prepared, counters, visit_leaves);
+    return traverse_bvh<TraversalOrder::any, LeafVisits::with_siblings>(bvh.nodes, start, prepared,
+                                                                        counters, visit_leaves);
 }
 
 }  // namespace REBRAID_SIMD_NAMESPACE

@@ -1,6 +1,12 @@
 #include "rebraid/top_level/instanced_accel.h"
 
+#include <array>
+#include <cstring>
+#include <map>
+#include <string>
+
 #include "rebraid/core/build_timer.h"
+#include "rebraid/core/error.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/top_level/bvh_stats.h"
 #include "rebraid/top_level/trace_kernels.h"
@@ -19,11 +25,30 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     object_to_world_.reserve(scene.instances.size());
     world_to_object_.reserve(scene.instances.size());
     instance_is_identity_.reserve(scene.instances.size());
+    instance_targets_.reserve(scene.instances.size());
+    // Distinct transforms by their exact bits: equal bits map every ray to equal bits.
+    std::map<std::array<std::uint32_t, 12>, std::uint32_t> space_of_bits;
+    const auto object_space_id = [&](const AffineTransform& to_object) {
+        std::array<std::uint32_t, 12> bits;
+        static_assert(sizeof(AffineTransform) == sizeof(bits));
+        std::memcpy(bits.data(), &to_object, sizeof(bits));
+        const auto [it, is_new] =
+            space_of_bits.try_emplace(bits, std::uint32_t(object_spaces_.size() + 1));
+        if (is_new) object_spaces_.push_back(to_object);
+        return it->second;
+    };
     for (const Instance& instance : scene.instances) {
+        if (instance.mesh_id >= object_bvhs_.size())
+            throw Error("InstancedAccel: instance of mesh " + std::to_string(instance.mesh_id) +
+                        " with " + std::to_string(object_bvhs_.size()) + " object BVHs");
         instance_mesh_.push_back(instance.mesh_id);
         object_to_world_.push_back(instance.object_to_world);
         world_to_object_.push_back(instance.object_to_world.inverse());
         instance_is_identity_.push_back(instance.object_to_world == AffineTransform::identity());
+        instance_targets_.push_back(
+            {object_bvhs_[instance.mesh_id], instance_is_identity_.back()
+                                                 ? InstanceTarget::kWorldSpace
+                                                 : object_space_id(world_to_object_.back())});
     }
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
@@ -61,8 +86,9 @@ AccelStats InstancedAccel::stats() const {
         hash.add_value(bvh.root);
         hash.add<PrimId>(bvh.prim_ids);
     }
-    memory += (object_to_world_.size() + world_to_object_.size()) * sizeof(AffineTransform) +
-              instance_is_identity_.size();
+    memory += (object_to_world_.size() + world_to_object_.size() + object_spaces_.size()) *
+                  sizeof(AffineTransform) +
+              instance_is_identity_.size() + instance_targets_.size() * sizeof(InstanceTarget);
     stats.nodes = nodes;
     stats.leaves = leaves;
     stats.memory_bytes = memory;

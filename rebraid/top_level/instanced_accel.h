@@ -10,6 +10,7 @@
 #include "rebraid/core/scene.h"
 #include "rebraid/core/simd_level.h"
 #include "rebraid/core/transform.h"
+#include "rebraid/top_level/instance_target.h"
 #include "rebraid/top_level/top_level_bvh.h"
 
 namespace rebraid {
@@ -46,6 +47,11 @@ public:
     const std::vector<AffineTransform>& world_to_object() const { return world_to_object_; }
     /// 1 where an instance's transform is the identity: rays enter it unmapped.
     const std::vector<std::uint8_t>& instance_is_identity() const { return instance_is_identity_; }
+    /// What entering each instance reads (index = InstanceId), made at construction.
+    const std::vector<InstanceTarget>& instance_targets() const { return instance_targets_; }
+    /// The distinct world-to-object transforms of the instances not placed by the identity:
+    /// InstanceTarget::space s > 0 names object_spaces()[s - 1].
+    const std::vector<AffineTransform>& object_spaces() const { return object_spaces_; }
 
     /// The kernel level rays are traced with: default_simd_level() at construction.
     SimdLevel simd_level() const { return simd_level_; }
@@ -61,6 +67,8 @@ private:
     std::vector<AffineTransform> world_to_object_;
     /// 1 where an instance's transform is the identity: rays enter it unmapped.
     std::vector<std::uint8_t> instance_is_identity_;
+    std::vector<InstanceTarget> instance_targets_;
+    std::vector<AffineTransform> object_spaces_;
     AccelStats build_info_;
     SimdLevel simd_level_;
     const TraceKernels* kernels_;

@@ -49,27 +49,25 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 }
 
 /// The ray mapped into the object space of the instance a top-level item names, prepared
-/// once per run of items of the same instance (a re-braided top level holds several items per
-/// instance, often side by side in one leaf). t is invariant under the affine map, so
-/// tnear and tfar carry over unchanged. Instances placed by the identity (objects built in
-/// world space, the paper's common case) use the prepared world ray itself: no transform, no
-/// reciprocals, no broadcasts, and the same numbers, since the identity maps every finite ray
-/// exactly.
+/// once per run of items in the same space (a re-braided top level holds several items per
+/// instance, often side by side in one leaf, and instances placed by the same transform share
+/// a space). t is invariant under the affine map, so tnear and tfar carry over unchanged.
+/// Instances placed by the identity (objects built in world space, the paper's common case)
+/// use the prepared world ray itself: no transform, no reciprocals, no broadcasts, and the
+/// same numbers, since the identity maps every finite ray exactly.
 class ObjectRayCache {
 public:
     ObjectRayCache(PreparedRay& world_ray, const InstancedAccel& accel)
-        : world_ray_(world_ray),
-          world_to_object_(accel.world_to_object()),
-          is_identity_(accel.instance_is_identity()) {}
+        : world_ray_(world_ray), object_spaces_(accel.object_spaces()) {}
 
-    PreparedRay& ray_for(InstanceId instance_id) {
-        if (is_identity_[instance_id]) return world_ray_;
+    PreparedRay& ray_for(const InstanceTarget& target) {
+        if (target.space == InstanceTarget::kWorldSpace) return world_ray_;
         const TraversalRay& world = world_ray_.ray;
-        if (instance_id != instance_id_) {
-            const AffineTransform& to_object = world_to_object_[instance_id];
+        if (target.space != space_) {
+            const AffineTransform& to_object = object_spaces_[target.space - 1];
             ray_.emplace(to_object.transform_point(world.org),
                          to_object.transform_vector(world.dir), world.tnear, world.tfar);
-            instance_id_ = instance_id;
+            space_ = target.space;
         }
         ray_->ray.tnear = world.tnear;
         ray_->ray.tfar = world.tfar;
@@ -78,20 +76,20 @@ public:
 
 private:
     PreparedRay& world_ray_;
-    std::span<const AffineTransform> world_to_object_;
-    std::span<const std::uint8_t> is_identity_;
-    InstanceId instance_id_ = kInvalidId;
+    std::span<const AffineTransform> object_spaces_;
+    std::uint32_t space_ = InstanceTarget::kWorldSpace;
     std::optional<PreparedRay> ray_;
 };
 
 /// Prefetches what entering the first item of top-level leaf `leaf` reads first.
-inline void prefetch_item_target(const InstancedAccel& accel, NodeRef leaf) {
-    const TopLevelItem& item = accel.top_level().items[leaf.first_prim()];
-    const ObjectBvh& bvh = accel.object_bvhs()[accel.instance_meshes()[item.instance_id]];
+inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* targets,
+                                 NodeRef leaf) {
+    const TopLevelItem& item = top.items[leaf.first_prim()];
+    const ObjectBvhView& bvh = targets[item.instance_id].bvh;
     if (item.object_node.is_leaf())
-        __builtin_prefetch(bvh.triangles.data() + item.object_node.first_prim());
+        __builtin_prefetch(bvh.triangles + item.object_node.first_prim());
     else
-        prefetch_node(bvh.nodes.data(), item.object_node);
+        prefetch_node(bvh.nodes, item.object_node);
 }
 
 [[gnu::flatten]] inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
@@ -100,16 +98,15 @@ inline void prefetch_item_target(const InstancedAccel& accel, NodeRef leaf) {
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray, accel);
     const TopLevelBvh& top = accel.top_level();
-    const ObjectBvh* object_bvhs = accel.object_bvhs().data();
-    const std::uint32_t* instance_mesh = accel.instance_meshes().data();
+    const InstanceTarget* targets = accel.instance_targets().data();
     const auto enter_items = [&](NodeRef leaf) {
         const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
             const TopLevelItem& item = top.items[i];
+            const InstanceTarget& target = targets[item.instance_id];
             if (counters) ++counters->object_entries;
-            PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
-            if (intersect_object_bvh(object_bvhs[instance_mesh[item.instance_id]], item.object_node,
-                                     object_ray, hit, counters)) {
+            PreparedRay& object_ray = object_rays.ray_for(target);
+            if (intersect_object_bvh(target.bvh, item.object_node, object_ray, hit, counters)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -118,7 +115,9 @@ inline void prefetch_item_target(const InstancedAccel& accel, NodeRef leaf) {
     };
     // A stacked item's object node is asked for as the item is stacked, as a flat BVH's
     // stacked nodes are: its miss then overlaps the work on nearer items.
-    const auto prefetch_item = [&accel](NodeRef leaf) { prefetch_item_target(accel, leaf); };
+    const auto prefetch_item = [&top, targets](NodeRef leaf) {
+        prefetch_item_target(top, targets, leaf);
+    };
     traverse_bvh(top.nodes.data(), top.root, world_ray, counters, enter_items, prefetch_item);
     return hit;
 }
@@ -127,17 +126,16 @@ inline void prefetch_item_target(const InstancedAccel& accel, NodeRef leaf) {
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray, accel);
     const TopLevelBvh& top = accel.top_level();
-    const ObjectBvh* object_bvhs = accel.object_bvhs().data();
-    const std::uint32_t* instance_mesh = accel.instance_meshes().data();
+    const InstanceTarget* targets = accel.instance_targets().data();
     // Any order: the first hit ends the query.
     return traverse_bvh<TraversalOrder::any>(
         top.nodes.data(), top.root, world_ray, nullptr, [&](NodeRef leaf) {
             const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
             for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
                 const TopLevelItem& item = top.items[i];
-                PreparedRay& object_ray = object_rays.ray_for(item.instance_id);
-                if (occluded_object_bvh(object_bvhs[instance_mesh[item.instance_id]],
-                                        item.object_node, object_ray, nullptr))
+                const InstanceTarget& target = targets[item.instance_id];
+                PreparedRay& object_ray = object_rays.ray_for(target);
+                if (occluded_object_bvh(target.bvh, item.object_node, object_ray, nullptr))
                     return true;
             }
             return false;

@@ -29,6 +29,7 @@
 #include "rebraid/core/triangle.h"
 #include "rebraid/core/types.h"
 #include "rebraid/top_level/flat_accel.h"
+#include "rebraid/top_level/instance_target.h"
 #include "rebraid/top_level/instanced_accel.h"
 #include "rebraid/top_level/top_level_bvh.h"
 #include "rebraid/top_level/trace_kernels.h"

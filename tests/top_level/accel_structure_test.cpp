@@ -70,5 +70,30 @@ TEST(FlatAndTwoLevel, SameStructureOnOneTwoAndEightThreads) {
     }
 }
 
+TEST(TwoLevelAccel, InstancesPlacedAlikeShareOneObjectSpace) {
+    // Two meshes; instances 1 and 2 are placed by the same rotation (as a file's root node
+    // places all its meshes), instance 3 by another, instance 0 by the identity.
+    Scene scene;
+    for (int m = 0; m < 2; ++m)
+        scene.meshes.push_back(
+            {"tri", {{0, 0, float(m)}, {1, 0, float(m)}, {0, 1, float(m)}}, {{0, 1, 2}}});
+    const AffineTransform turn = AffineTransform::rotate({1, 0, 0}, 1.5707964f);
+    const AffineTransform other = AffineTransform::translate({5, 0, 0});
+    scene.instances = {{0, AffineTransform::identity()}, {0, turn}, {1, turn}, {1, other}};
+    const InstancedAccel accel = build_two_level_accel(scene);
+    const std::vector<InstanceTarget>& targets = accel.instance_targets();
+    ASSERT_EQ(targets.size(), 4u);
+    EXPECT_EQ(targets[0].space, InstanceTarget::kWorldSpace);
+    EXPECT_NE(targets[1].space, InstanceTarget::kWorldSpace);
+    EXPECT_EQ(targets[1].space, targets[2].space);
+    EXPECT_NE(targets[3].space, InstanceTarget::kWorldSpace);
+    EXPECT_NE(targets[3].space, targets[1].space);
+    ASSERT_EQ(accel.object_spaces().size(), 2u);
+    EXPECT_EQ(accel.object_spaces()[targets[1].space - 1], turn.inverse());
+    EXPECT_EQ(accel.object_spaces()[targets[3].space - 1], other.inverse());
+    EXPECT_EQ(targets[2].bvh.nodes, accel.object_bvhs()[1].nodes.data());
+    EXPECT_EQ(targets[2].bvh.triangles, accel.object_bvhs()[1].triangles.data());
+}
+
 }  // namespace
 }  // namespace rebraid
