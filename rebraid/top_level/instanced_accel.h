@@ -27,6 +27,12 @@ public:
     /// for stats(); the rest of the statistics are computed from the structure.
     InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs, TopLevelBvh top,
                    const AccelStats& build_info);
+    // Movable, not copyable: instance_targets() point into the object BVHs' arrays, which a
+    // move carries along and a copy would not.
+    InstancedAccel(InstancedAccel&&) = default;
+    InstancedAccel& operator=(InstancedAccel&&) = default;
+    InstancedAccel(const InstancedAccel&) = delete;
+    InstancedAccel& operator=(const InstancedAccel&) = delete;
 
     Hit intersect_counted(const Ray& ray, TraversalCounters* counters) const override;
     bool occluded(const Ray& ray) const override;
