@@ -23,8 +23,6 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
       kernels_(&trace_kernels(simd_level_)) {
     instance_mesh_.reserve(scene.instances.size());
     object_to_world_.reserve(scene.instances.size());
-    world_to_object_.reserve(scene.instances.size());
-    instance_is_identity_.reserve(scene.instances.size());
     instance_targets_.reserve(scene.instances.size());
     // Distinct transforms by their exact bits: equal bits map every ray to equal bits.
     std::map<std::array<std::uint32_t, 12>, std::uint32_t> space_of_bits;
@@ -43,12 +41,11 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
                         " with " + std::to_string(object_bvhs_.size()) + " object BVHs");
         instance_mesh_.push_back(instance.mesh_id);
         object_to_world_.push_back(instance.object_to_world);
-        world_to_object_.push_back(instance.object_to_world.inverse());
-        instance_is_identity_.push_back(instance.object_to_world == AffineTransform::identity());
-        instance_targets_.push_back(
-            {object_bvhs_[instance.mesh_id], instance_is_identity_.back()
-                                                 ? InstanceTarget::kWorldSpace
-                                                 : object_space_id(world_to_object_.back())});
+        const bool is_identity = instance.object_to_world == AffineTransform::identity();
+        instance_targets_.push_back({object_bvhs_[instance.mesh_id],
+                                     is_identity
+                                         ? InstanceTarget::kWorldSpace
+                                         : object_space_id(instance.object_to_world.inverse())});
     }
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
@@ -86,9 +83,8 @@ AccelStats InstancedAccel::stats() const {
         hash.add_value(bvh.root);
         hash.add<PrimId>(bvh.prim_ids);
     }
-    memory += (object_to_world_.size() + world_to_object_.size() + object_spaces_.size()) *
-                  sizeof(AffineTransform) +
-              instance_is_identity_.size() + instance_targets_.size() * sizeof(InstanceTarget);
+    memory += (object_to_world_.size() + object_spaces_.size()) * sizeof(AffineTransform) +
+              instance_targets_.size() * sizeof(InstanceTarget);
     stats.nodes = nodes;
     stats.leaves = leaves;
     stats.memory_bytes = memory;

@@ -49,10 +49,6 @@ public:
     TopLevelBvh release_top_level() && { return std::move(top_); }
     /// Mesh of each instance (index = InstanceId).
     const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
-    /// Inverse transform of each instance, made at construction.
-    const std::vector<AffineTransform>& world_to_object() const { return world_to_object_; }
-    /// 1 where an instance's transform is the identity: rays enter it unmapped.
-    const std::vector<std::uint8_t>& instance_is_identity() const { return instance_is_identity_; }
     /// What entering each instance reads (index = InstanceId), made at construction.
     const std::vector<InstanceTarget>& instance_targets() const { return instance_targets_; }
     /// The distinct world-to-object transforms of the instances not placed by the identity:
@@ -70,9 +66,6 @@ private:
     TopLevelBvh top_;
     std::vector<std::uint32_t> instance_mesh_;
     std::vector<AffineTransform> object_to_world_;
-    std::vector<AffineTransform> world_to_object_;
-    /// 1 where an instance's transform is the identity: rays enter it unmapped.
-    std::vector<std::uint8_t> instance_is_identity_;
     std::vector<InstanceTarget> instance_targets_;
     std::vector<AffineTransform> object_spaces_;
     AccelStats build_info_;

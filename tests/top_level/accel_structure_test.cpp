@@ -6,6 +6,7 @@
 
 #include <functional>
 
+#include "rebraid/core/error.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/top_level/flat_accel.h"
@@ -93,6 +94,15 @@ TEST(TwoLevelAccel, InstancesPlacedAlikeShareOneObjectSpace) {
     EXPECT_EQ(accel.object_spaces()[targets[3].space - 1], other.inverse());
     EXPECT_EQ(targets[2].bvh.nodes, accel.object_bvhs()[1].nodes.data());
     EXPECT_EQ(targets[2].bvh.triangles, accel.object_bvhs()[1].triangles.data());
+}
+
+TEST(TwoLevelAccel, InstanceOfAMeshWithoutObjectBvhIsRefused) {
+    Scene scene;
+    scene.meshes.push_back({"tri", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}});
+    scene.meshes.push_back(scene.meshes[0]);
+    scene.instances = {{0, AffineTransform::identity()}, {1, AffineTransform::identity()}};
+    std::vector<ObjectBvh> one_bvh(1);
+    EXPECT_THROW(InstancedAccel(scene, std::move(one_bvh), TopLevelBvh{}, AccelStats{}), Error);
 }
 
 }  // namespace
