@@ -24,17 +24,10 @@ inline constexpr float kRobustBoxScale = 1.0f + 4.0f * 5.96046448e-08f;
 /// once per traversal rather than per node.
 class NodeBoxTest {
 public:
-    explicit NodeBoxTest(const TraversalRay& ray) {
+    explicit NodeBoxTest(const TraversalRay& ray) : planes_(&ray.plane_offsets()) {
         for (int a = 0; a < 3; ++a) {
             org_[a] = _mm256_set1_ps(ray.org[a]);
             rdir_[a] = _mm256_set1_ps(ray.rdir[a]);
-            // Derived again rather than copied from ray.near_offset/far_offset: the ray was
-            // usually written just before, element by element, and the compiler reads those
-            // arrays back with wider loads, which cannot be forwarded from the narrower
-            // stores (a stall measured at every traversal start).
-            const bool is_negative = !(ray.rdir[a] >= 0.0f);
-            near_offset_[a] = slab_plane_offset(a, is_negative, false);
-            far_offset_[a] = slab_plane_offset(a, is_negative, true);
         }
     }
 
@@ -48,9 +41,9 @@ public:
             const __m256 plane = _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
             return _mm256_mul_ps(_mm256_sub_ps(plane, org_[axis]), rdir_[axis]);
         };
-        const __m256 near_x = slab(near_offset_[0], 0), far_x = slab(far_offset_[0], 0);
-        const __m256 near_y = slab(near_offset_[1], 1), far_y = slab(far_offset_[1], 1);
-        const __m256 near_z = slab(near_offset_[2], 2), far_z = slab(far_offset_[2], 2);
+        const __m256 near_x = slab(planes_->near[0], 0), far_x = slab(planes_->far[0], 0);
+        const __m256 near_y = slab(planes_->near[1], 1), far_y = slab(planes_->far[1], 1);
+        const __m256 near_z = slab(planes_->near[2], 2), far_z = slab(planes_->far[2], 2);
         const __m256 entry = _mm256_max_ps(_mm256_max_ps(near_x, near_y),
                                            _mm256_max_ps(near_z, _mm256_set1_ps(tnear)));
         const __m256 exit =
@@ -63,8 +56,7 @@ public:
 private:
     __m256 org_[3];
     __m256 rdir_[3];
-    std::uint32_t near_offset_[3];
-    std::uint32_t far_offset_[3];
+    const SlabPlaneOffsets* planes_;
 };
 
 /// Bit i set when distances[i] (32-byte aligned, as NodeBoxTest wrote them) is at most
@@ -86,7 +78,7 @@ inline unsigned leaf_slots(const WideNode& node) {
 
 class NodeBoxTest {
 public:
-    explicit NodeBoxTest(const TraversalRay& ray) : ray_(ray) {}
+    explicit NodeBoxTest(const TraversalRay& ray) : ray_(ray), planes_(ray.plane_offsets()) {}
 
     unsigned operator()(const WideNode& node, float tnear, float tfar, float* distances) const {
         const char* base = reinterpret_cast<const char*>(&node);
@@ -97,10 +89,9 @@ public:
         for (int i = 0; i < kBvhWidth; ++i) {
             float t_enter = tnear, t_exit = tfar;
             for (int a = 0; a < 3; ++a) {
-                t_enter = std::fmax(t_enter,
-                                    (plane(ray_.near_offset[a], i) - ray_.org[a]) * ray_.rdir[a]);
-                t_exit =
-                    std::fmin(t_exit, (plane(ray_.far_offset[a], i) - ray_.org[a]) * ray_.rdir[a]);
+                t_enter =
+                    std::fmax(t_enter, (plane(planes_.near[a], i) - ray_.org[a]) * ray_.rdir[a]);
+                t_exit = std::fmin(t_exit, (plane(planes_.far[a], i) - ray_.org[a]) * ray_.rdir[a]);
             }
             distances[i] = t_enter;
             if (t_enter <= t_exit * kRobustBoxScale) mask |= 1u << i;
@@ -110,6 +101,7 @@ public:
 
 private:
     const TraversalRay& ray_;
+    const SlabPlaneOffsets& planes_;
 };
 
 inline unsigned entered_before(const float* distances, float tfar) {
