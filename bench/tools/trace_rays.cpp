@@ -6,28 +6,17 @@
 //       RAYS ACCEL
 // With several ray files, --dump-after='*trace_all*' writes one profile per file, so one
 // build (emulated slowly by valgrind) serves them all (bench/tools/count_instructions.py).
-// ACCEL: flat, twolevel, rebraid, embree-flat or embree-instanced.
+// ACCEL: a structure as `rebraid bench --accel` names one, variants included
+// (`rebraid:budget-factor=16`).
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "embree_glue/reference/embree_reference.h"
+#include "accel_factory.h"
 #include "rebraid/rebraid.h"
 
 namespace {
-
-std::unique_ptr<rebraid::Accel> build(const std::string& name, const rebraid::Scene& scene) {
-    if (name == "flat") return std::make_unique<rebraid::FlatAccel>(scene);
-    if (name == "twolevel")
-        return std::make_unique<rebraid::InstancedAccel>(rebraid::build_two_level_accel(scene));
-    if (name == "rebraid")
-        return std::make_unique<rebraid::InstancedAccel>(rebraid::build_rebraid_accel(scene));
-    if (name == "embree-flat") return std::make_unique<rebraid::glue::EmbreeFlatAccel>(scene);
-    if (name == "embree-instanced")
-        return std::make_unique<rebraid::glue::EmbreeInstancedAccel>(scene);
-    throw rebraid::Error("unknown structure '" + name + "'");
-}
 
 struct TraceSummary {
     std::size_t hits = 0;
@@ -65,7 +54,7 @@ int main(int argc, char** argv) {
         std::vector<std::vector<rebraid::Ray>> ray_sets;
         for (int file = 2; file < argc - 1; ++file)
             ray_sets.push_back(rebraid::read_ray_file(argv[file]));
-        const std::unique_ptr<rebraid::Accel> accel = build(argv[argc - 1], scene);
+        const std::unique_ptr<rebraid::Accel> accel = rebraid::cli::build_accel(argv[argc - 1], scene);
         for (const std::vector<rebraid::Ray>& rays : ray_sets) {
             const TraceSummary summary = trace_all(*accel, rays);
             std::printf("%zu rays, %zu hits, %zu occluded, t sum %.9g\n", rays.size(), summary.hits,
