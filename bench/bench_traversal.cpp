@@ -17,9 +17,10 @@
 // --rays: rays per kind and scene (default 200000; primary rays round it to a square image);
 // --threads: tracing threads (default 1: single-ray speed, timed by the thread's CPU time;
 // more: wall-clock time); --rounds: rounds of the compare benchmarks (default 5);
-// --leaf-size, --intersection-cost, --fill-nodes 0|1, --max-children N: BuildSettings of the flat
-// and object BVHs (default: the builder's defaults), to measure how the tree shape changes
-// traversal speed. Structures are built once per scene, outside the timed loops.
+// --leaf-size, --intersection-cost, --fill-nodes 0|1, --max-children N, --pre-arranged-leaves
+// 0|1: BuildSettings of the flat and object BVHs (default: the builder's defaults), to measure how
+// the tree shape changes traversal speed. Structures are built once per scene, outside the timed
+// loops.
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -314,6 +315,8 @@ int run(int argc, char** argv) {
         bench.build.fill_nodes = v != "0";
     if (std::string v = take_flag(argc, argv, "--max-children"); !v.empty())
         bench.build.max_children = std::uint32_t(std::stoul(v));
+    if (std::string v = take_flag(argc, argv, "--pre-arranged-leaves"); !v.empty())
+        bench.build.pre_arranged_leaves = v != "0";
     bench.build.validate();
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
@@ -325,6 +328,7 @@ int run(int argc, char** argv) {
     benchmark::AddCustomContext("intersection_cost", std::to_string(bench.build.intersection_cost));
     benchmark::AddCustomContext("fill_nodes", bench.build.fill_nodes ? "1" : "0");
     benchmark::AddCustomContext("max_children", std::to_string(bench.build.max_children));
+    benchmark::AddCustomContext("pre_arranged_leaves", bench.build.pre_arranged_leaves ? "1" : "0");
 
     register_scene("default", [] { return make_default_scene(); });
     std::vector<std::filesystem::path> files;

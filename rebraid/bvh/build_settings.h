@@ -46,6 +46,10 @@ struct BuildSettings {
     /// all of them at once, so fewer children only make the tree deeper: a setting for
     /// measuring what the 8-wide layout buys (bench/bench_traversal.cpp's max_children).
     std::uint32_t max_children = kBvhWidth;
+    /// Keep each leaf's corners also pre-arranged for the SIMD triangle test (leaf_rows.h):
+    /// 36 more bytes per triangle, for no transpose per test (docs/design.md, "Leaves").
+    /// Without them the kernels gather corners from the per-triangle copies.
+    bool pre_arranged_leaves = true;
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/triangle.h"
 #include "rebraid/core/types.h"
@@ -18,9 +19,15 @@ struct ObjectBvh {
     BBox3f bounds;
     std::vector<PrimId> prim_ids;          ///< leaf order -> triangle index in the mesh
     std::vector<TriangleVerts> triangles;  ///< leaf order -> corners, copied from the mesh
+    /// The same corners pre-arranged per leaf for the SIMD tests (leaf_rows.h); empty until
+    /// made, and then kept in step with `triangles` by whatever changes them.
+    std::vector<float> leaf_rows;
     double build_ms = 0.0;
 
     std::uint32_t prim_count() const { return std::uint32_t(prim_ids.size()); }
+    /// Writes leaf_rows again from `triangles` and the current leaves, in place (when made):
+    /// what an update that regroups leaves calls last.
+    void refresh_leaf_rows();
     /// Bytes held by the arrays above.
     std::uint64_t memory_bytes() const;
 };
@@ -32,10 +39,14 @@ struct ObjectBvhView {
     const WideNode* nodes = nullptr;
     const TriangleVerts* triangles = nullptr;  ///< leaf order
     const PrimId* prim_ids = nullptr;          ///< leaf order -> triangle index in the mesh
+    const float* leaf_rows = nullptr;          ///< ObjectBvh::leaf_rows past its padding
 
     ObjectBvhView() = default;
     ObjectBvhView(const ObjectBvh& bvh)  // NOLINT: a view converts implicitly, as a span does
-        : nodes(bvh.nodes.data()), triangles(bvh.triangles.data()), prim_ids(bvh.prim_ids.data()) {}
+        : nodes(bvh.nodes.data()),
+          triangles(bvh.triangles.data()),
+          prim_ids(bvh.prim_ids.data()),
+          leaf_rows(bvh.leaf_rows.empty() ? nullptr : bvh.leaf_rows.data() + kLeafRowPadding) {}
 };
 
 }  // namespace rebraid

@@ -28,7 +28,8 @@ std::vector<BuildPrim> make_triangle_build_prims(const Mesh& mesh) {
     return prims;
 }
 
-ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> leaf_prims) {
+ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> leaf_prims,
+                          bool pre_arranged_leaves) {
     ObjectBvh bvh;
     bvh.nodes = on_huge_pages_if_large(std::move(tree.nodes));
     bvh.root = tree.root;
@@ -40,6 +41,7 @@ ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> le
         const auto corners = mesh.corners(bvh.prim_ids[i]);
         bvh.triangles[i] = {corners[0], corners[1], corners[2]};
     });
+    if (pre_arranged_leaves) bvh.leaf_rows = make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles);
     return bvh;
 }
 
@@ -49,7 +51,8 @@ ObjectBvh build_object_bvh(const Mesh& mesh, const BuildSettings& settings) {
     WideBvh tree = build_wide_bvh(prims, settings);
     std::vector<PrimId> leaf_prims(prims.size());
     for (std::size_t i = 0; i < prims.size(); ++i) leaf_prims[i] = prims[i].id;
-    ObjectBvh bvh = make_object_bvh(mesh, std::move(tree), std::move(leaf_prims));
+    ObjectBvh bvh =
+        make_object_bvh(mesh, std::move(tree), std::move(leaf_prims), settings.pre_arranged_leaves);
     bvh.build_ms = timer.elapsed_ms();
     return bvh;
 }

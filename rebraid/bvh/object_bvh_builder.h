@@ -15,8 +15,10 @@ namespace rebraid {
 ObjectBvh build_object_bvh(const Mesh& mesh, const BuildSettings& settings = {});
 
 /// Completes an ObjectBvh from a tree whose leaves index `leaf_prims` (primIDs of `mesh` in
-/// leaf order), e.g. one made by Embree's rtcBuildBVH: copies the triangles in leaf order.
-ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> leaf_prims);
+/// leaf order), e.g. one made by Embree's rtcBuildBVH: copies the triangles in leaf order,
+/// and pre-arranges them per leaf when `pre_arranged_leaves` (BuildSettings).
+ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> leaf_prims,
+                          bool pre_arranged_leaves = true);
 
 /// One BuildPrim per triangle of `mesh` (bounds in object space, id = primID).
 std::vector<BuildPrim> make_triangle_build_prims(const Mesh& mesh);

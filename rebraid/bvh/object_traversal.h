@@ -3,6 +3,7 @@
 #include <bit>
 #include <cstdint>
 
+#include "rebraid/bvh/leaf_row_lanes.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/traversal.h"
 #include "rebraid/bvh/triangle_group.h"
@@ -54,6 +55,15 @@ public:
         test();
     }
     std::uint32_t count() const { return count_; }
+    /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any.
+    bool intersect(const TriangleGroupRay& ray, float tnear, float tfar,
+                   TriangleGroupHit& hit) const {
+        return intersect_triangle_lanes(lanes_, count_, ray, tnear, tfar, hit);
+    }
+    /// Whether the ray hits any of the gathered triangles within [tnear, tfar].
+    bool occluded(const TriangleGroupRay& ray, float tnear, float tfar) const {
+        return occluded_triangle_lanes(lanes_, count_, ray, tnear, tfar);
+    }
     const TriangleVerts* const* lanes() const { return lanes_; }
     /// Leaf-order position of the triangle in `lane`.
     std::uint32_t position(std::uint32_t lane) const {
@@ -67,26 +77,19 @@ private:
     std::uint32_t count_ = 0;
 };
 
-/// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
-/// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and hit.prim_id to the hit's
-/// position in leaf order (index into bvh.prim_ids and bvh.triangles), and returns true;
-/// leaves hit.instance_id to the caller.
-/// `prefetch_hit_data(position)` is called with the leaf-order position of every closer hit
-/// as it is found: the caller prefetches what it will look up for the final hit (ids in
-/// leaf order), so that the lookup's cache miss overlaps the rest of the traversal. (Asking
-/// for every visited leaf's ids instead cost more than the misses it hid.)
-template <class HitDataPrefetch = NoHitDataPrefetch>
-bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
-                                     Hit& hit, TraversalCounters* counters,
-                                     HitDataPrefetch&& prefetch_hit_data = {}) {
+namespace object_traversal_detail {
+
+/// intersect_object_bvh_leaf_order with `lanes` gathering the leaves' triangles.
+template <class Lanes, class HitDataPrefetch>
+bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
+                          Hit& hit, TraversalCounters* counters,
+                          HitDataPrefetch&& prefetch_hit_data) {
     TraversalRay& ray = prepared.ray;
     const TriangleGroupRay& group_ray = prepared.triangle_ray;
     bool found = false;
-    LeafTriangleLanes lanes(bvh.triangles);
     const auto test_lanes = [&] {
         TriangleGroupHit group_hit;
-        if (intersect_triangle_lanes(lanes.lanes(), lanes.count(), group_ray, ray.tnear, ray.tfar,
-                                     group_hit)) {
+        if (lanes.intersect(group_ray, ray.tnear, ray.tfar, group_hit)) {
             ray.tfar = group_hit.t;
             hit.t = group_hit.t;
             hit.u = group_hit.u;
@@ -102,9 +105,59 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
         lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [] { return false; });
         return false;
     };
-    traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
-        bvh.nodes, start, prepared, counters, visit_leaves);
+    traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(nodes, start, prepared,
+                                                                           counters, visit_leaves);
     return found;
+}
+
+/// occluded_object_bvh with `lanes` gathering the leaves' triangles.
+template <class Lanes>
+bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
+                         TraversalCounters* counters) {
+    const TraversalRay& ray = prepared.ray;
+    const TriangleGroupRay& group_ray = prepared.triangle_ray;
+    bool is_occluded = false;
+    const auto test_lanes = [&] {
+        is_occluded = is_occluded || lanes.occluded(group_ray, ray.tnear, ray.tfar);
+        lanes.clear();
+    };
+    const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
+        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [&] { return is_occluded; });
+        return is_occluded;
+    };
+    // Any order: the first hit ends the query, and sorting the children costs more than the
+    // nearer hits it would find first (measured on the shared scenes).
+    return traverse_bvh<TraversalOrder::any, LeafVisits::with_siblings>(nodes, start, prepared,
+                                                                        counters, visit_leaves);
+}
+
+}  // namespace object_traversal_detail
+
+/// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
+/// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and hit.prim_id to the hit's
+/// position in leaf order (index into bvh.prim_ids and bvh.triangles), and returns true;
+/// leaves hit.instance_id to the caller.
+/// `prefetch_hit_data(position)` is called with the leaf-order position of every closer hit
+/// as it is found: the caller prefetches what it will look up for the final hit (ids in
+/// leaf order), so that the lookup's cache miss overlaps the rest of the traversal. (Asking
+/// for every visited leaf's ids instead cost more than the misses it hid.)
+template <class HitDataPrefetch = NoHitDataPrefetch>
+bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
+                                     Hit& hit, TraversalCounters* counters,
+                                     HitDataPrefetch&& prefetch_hit_data = {}) {
+    using namespace object_traversal_detail;
+#ifdef REBRAID_SIMD_AVX2
+    // The pre-arranged rows (when made) below an inner node; a leaf start may be part of a
+    // leaf (a re-braided BRef of one triangle), which only the corner storage addresses.
+    if (start.is_inner() && bvh.leaf_rows != nullptr) {
+        LeafRowLanes lanes(bvh.leaf_rows);
+        return intersect_with_lanes(lanes, bvh.nodes, start, prepared, hit, counters,
+                                    prefetch_hit_data);
+    }
+#endif
+    LeafTriangleLanes lanes(bvh.triangles);
+    return intersect_with_lanes(lanes, bvh.nodes, start, prepared, hit, counters,
+                                prefetch_hit_data);
 }
 
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
@@ -128,23 +181,15 @@ inline bool intersect_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& 
 /// True when any triangle below `start` is hit within [ray.tnear, ray.tfar].
 inline bool occluded_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                 TraversalCounters* counters) {
-    const TraversalRay& ray = prepared.ray;
-    const TriangleGroupRay& group_ray = prepared.triangle_ray;
+    using namespace object_traversal_detail;
+#ifdef REBRAID_SIMD_AVX2
+    if (start.is_inner() && bvh.leaf_rows != nullptr) {  // see intersect_object_bvh_leaf_order
+        LeafRowLanes lanes(bvh.leaf_rows);
+        return occluded_with_lanes(lanes, bvh.nodes, start, prepared, counters);
+    }
+#endif
     LeafTriangleLanes lanes(bvh.triangles);
-    bool is_occluded = false;
-    const auto test_lanes = [&] {
-        is_occluded = is_occluded || occluded_triangle_lanes(lanes.lanes(), lanes.count(),
-                                                             group_ray, ray.tnear, ray.tfar);
-        lanes.clear();
-    };
-    const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
-        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [&] { return is_occluded; });
-        return is_occluded;
-    };
-    // Any order: the first hit ends the query, and sorting the children costs more than the
-    // nearer hits it would find first (measured on the shared scenes).
-    return traverse_bvh<TraversalOrder::any, LeafVisits::with_siblings>(bvh.nodes, start, prepared,
-                                                                        counters, visit_leaves);
+    return occluded_with_lanes(lanes, bvh.nodes, start, prepared, counters);
 }
 
 }  // namespace REBRAID_SIMD_NAMESPACE

@@ -70,6 +70,11 @@ struct GroupCorners {
     static_assert(sizeof(TriangleVerts) == 36, "rows are read at fixed float offsets");
     Vec3x8 corner[3];
 
+    /// From pre-arranged rows (row 3c + a: axis a of corner c, one triangle per lane).
+    explicit GroupCorners(const __m256 (&rows)[9]) {
+        for (int c = 0; c < 3; ++c) corner[c] = {rows[3 * c], rows[3 * c + 1], rows[3 * c + 2]};
+    }
+
     template <class TriangleOfLane>
     GroupCorners(TriangleOfLane&& triangle_of, std::uint32_t count) {
         const float* row[kTriangleGroupSize];
@@ -187,6 +192,24 @@ inline bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint
     using namespace triangle_group_detail;
     const GroupCorners corners([lanes](std::uint32_t i) { return lanes[i]; }, count);
     return GroupTest(corners, count, ray, tnear, tfar).mask != 0;
+}
+
+/// As intersect_triangle_lanes, for `count` triangles given as pre-arranged rows.
+inline bool intersect_triangle_rows(const __m256 (&rows)[9], std::uint32_t count,
+                                    const TriangleGroupRay& ray, float tnear, float tfar,
+                                    TriangleGroupHit& hit) {
+    using namespace triangle_group_detail;
+    const GroupTest test(GroupCorners(rows), count, ray, tnear, tfar);
+    if (test.mask == 0) return false;
+    hit = closest_lane(test);
+    return true;
+}
+
+/// As occluded_triangle_lanes, for `count` triangles given as pre-arranged rows.
+inline bool occluded_triangle_rows(const __m256 (&rows)[9], std::uint32_t count,
+                                   const TriangleGroupRay& ray, float tnear, float tfar) {
+    using namespace triangle_group_detail;
+    return GroupTest(GroupCorners(rows), count, ray, tnear, tfar).mask != 0;
 }
 
 #else  // portable path: the scalar test, one triangle after the other

@@ -521,6 +521,7 @@ RotationPassStats BvhRotator::refit_and_rotate(const Mesh& mesh, ObjectBvh& bvh,
     bvh.bounds = root.bounds;
     const double root_area = root.bounds.half_area();
     stats.sah = root_area > 0.0 ? root.cost / root_area : 0.0;
+    bvh.refresh_leaf_rows();  // leaves may have been merged, split or reordered
     return stats;
 }
 

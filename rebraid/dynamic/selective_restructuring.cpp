@@ -260,6 +260,7 @@ RestructureStats SelectiveRestructurer::restructure(const Mesh& mesh, ObjectBvh&
         stats.prims_rebuilt += info.prim_count;
     }
     stats.sah = (tree_cost + cost_change) / root_area;
+    if (stats.subtrees_rebuilt > 0) bvh.refresh_leaf_rows();  // rebuilt subtrees' leaves
     return stats;
 }
 

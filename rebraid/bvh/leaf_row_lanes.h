@@ -1,0 +1,105 @@
+#pragma once
+
+#include <bit>
+#include <cstdint>
+
+#include "rebraid/bvh/leaf_rows.h"
+#include "rebraid/bvh/triangle_group.h"
+#include "rebraid/core/accel.h"
+#include "rebraid/core/simd_config.h"
+
+namespace rebraid {
+inline namespace REBRAID_SIMD_NAMESPACE {
+
+#ifdef REBRAID_SIMD_AVX2
+
+/// The triangles of several leaves gathered into the lanes of one group test from their
+/// pre-arranged rows (leaf_rows.h): each leaf's row lands in its lanes with one unaligned
+/// load shifted by its first lane and a blend, where the corner storage needs a transpose
+/// per triangle.
+class LeafRowLanes {
+public:
+    explicit LeafRowLanes(const float* rows) : rows_(rows) {}
+
+    /// Adds the leaf's triangles; `on_full()` is called (to test and clear the lanes)
+    /// whenever all lanes are taken and more triangles remain.
+    template <class OnFull>
+    void add(NodeRef leaf, OnFull&& on_full) {
+        const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
+        const float* base = rows_ + std::size_t(9) * first;
+        for (std::uint32_t done = 0; done < count;) {
+            if (count_ == kTriangleGroupSize) on_full();
+            const std::uint32_t take = std::min(count - done, kTriangleGroupSize - count_);
+            segments_[segment_count_++] = {base + done, count, count_, first + done};
+            count_ += take;
+            done += take;
+        }
+    }
+    /// As LeafTriangleLanes::add_leaves_and_test.
+    template <class Test, class IsDone>
+    void add_leaves_and_test(const NodeRef* refs, unsigned slots, TraversalCounters* counters,
+                             Test&& test, IsDone&& is_done) {
+        do {
+            const NodeRef leaf = refs[std::countr_zero(slots)];
+            slots &= slots - 1;
+            if (counters) counters->triangles_tested += leaf.prim_count();
+            add(leaf, test);
+        } while (slots && !is_done());
+        test();
+    }
+    std::uint32_t count() const { return count_; }
+    /// The 9 rows of the gathered triangles (lanes past count() hold arbitrary values).
+    void load_rows(__m256 (&rows)[9]) const {
+        const Segment& first = segments_[0];  // starts at lane 0
+        for (std::uint32_t r = 0; r < 9; ++r)
+            rows[r] = _mm256_loadu_ps(first.base + std::size_t(r) * first.stride);
+        for (std::uint32_t s = 1; s < segment_count_; ++s) {
+            const Segment& segment = segments_[s];
+            // Lanes from segment.lane on; later segments overwrite the lanes past this one.
+            const __m256 lanes = _mm256_loadu_ps(kLanesFrom + 8 - segment.lane);
+            const float* shifted = segment.base - segment.lane;
+            for (std::uint32_t r = 0; r < 9; ++r)
+                rows[r] = _mm256_blendv_ps(
+                    rows[r], _mm256_loadu_ps(shifted + std::size_t(r) * segment.stride), lanes);
+        }
+    }
+    /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any.
+    bool intersect(const TriangleGroupRay& ray, float tnear, float tfar,
+                   TriangleGroupHit& hit) const {
+        __m256 rows[9];
+        load_rows(rows);
+        return intersect_triangle_rows(rows, count_, ray, tnear, tfar, hit);
+    }
+    /// Whether the ray hits any of the gathered triangles within [tnear, tfar].
+    bool occluded(const TriangleGroupRay& ray, float tnear, float tfar) const {
+        __m256 rows[9];
+        load_rows(rows);
+        return occluded_triangle_rows(rows, count_, ray, tnear, tfar);
+    }
+    /// Leaf-order position of the triangle in `lane`.
+    std::uint32_t position(std::uint32_t lane) const {
+        std::uint32_t s = segment_count_ - 1;
+        while (segments_[s].lane > lane) --s;
+        return segments_[s].position + (lane - segments_[s].lane);
+    }
+    void clear() { count_ = segment_count_ = 0; }
+
+private:
+    /// A run of one leaf's triangles: its rows from `base` (row r at base + r * stride), in
+    /// lanes from `lane` on, the first at leaf-order `position`.
+    struct Segment {
+        const float* base;
+        std::uint32_t stride, lane, position;
+    };
+    /// Sign bits set from index 8 on: 8 floats read from kLanesFrom + 8 - k select lanes k..7.
+    static constexpr float kLanesFrom[16] = {
+        0, 0, 0, 0, 0, 0, 0, 0, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f};
+    const float* rows_;
+    Segment segments_[kTriangleGroupSize];  // left uninitialised: filled as used
+    std::uint32_t count_ = 0, segment_count_ = 0;
+};
+
+#endif
+
+}  // namespace REBRAID_SIMD_NAMESPACE
+}  // namespace rebraid

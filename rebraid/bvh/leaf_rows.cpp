@@ -1,0 +1,48 @@
+#include "rebraid/bvh/leaf_rows.h"
+
+#include <string>
+
+#include "rebraid/core/error.h"
+
+namespace rebraid {
+
+void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, float* rows) {
+    const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
+    float* out = rows + kLeafRowPadding + std::size_t(9) * first;
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const TriangleVerts& t = triangles[first + i];
+        const Vec3f corners[3] = {t.v0, t.v1, t.v2};
+        for (int c = 0; c < 3; ++c)
+            for (int a = 0; a < 3; ++a) out[(3 * c + a) * count + i] = corners[c][a];
+    }
+}
+
+void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
+                       const std::vector<TriangleVerts>& triangles, std::vector<float>& rows) {
+    if (rows.size() != 9 * triangles.size() + 2 * kLeafRowPadding)
+        throw Error("rewrite_leaf_rows: " + std::to_string(rows.size()) + " floats for " +
+                    std::to_string(triangles.size()) + " triangles (internal error)");
+    if (root.is_empty()) return;
+    std::vector<NodeRef> pending{root};
+    while (!pending.empty()) {
+        const NodeRef ref = pending.back();
+        pending.pop_back();
+        if (ref.is_leaf()) {
+            write_leaf_rows(ref, triangles.data(), rows.data());
+            continue;
+        }
+        for (const NodeRef child : nodes[ref.node_id()].children)
+            if (!child.is_empty()) pending.push_back(child);
+    }
+}
+
+std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
+                                  const std::vector<TriangleVerts>& triangles) {
+    // Zeros in the padding and in positions no leaf covers: loads past a leaf read finite
+    // values into lanes that are masked off.
+    std::vector<float> rows(9 * triangles.size() + 2 * kLeafRowPadding, 0.0f);
+    rewrite_leaf_rows(nodes, root, triangles, rows);
+    return rows;
+}
+
+}  // namespace rebraid

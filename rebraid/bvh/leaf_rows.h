@@ -1,0 +1,34 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rebraid/bvh/wide_node.h"
+#include "rebraid/core/triangle.h"
+
+namespace rebraid {
+
+/// Floats of padding before and after the leaf rows: a SIMD load of a leaf's row may start
+/// up to this many floats before the leaf and run as far past it.
+inline constexpr std::uint32_t kLeafRowPadding = 8;
+
+/// The corners of every leaf's triangles stored pre-arranged for the SIMD group test: the
+/// leaf at leaf-order positions [p, p + n) holds 9 rows of n floats at floats [9p, 9p + 9n)
+/// (after the leading padding), row 3c + a holding axis a of corner c of the leaf's
+/// triangles in order. A test then loads each row straight into its lanes instead of
+/// transposing three corners per triangle, at no more memory than the corners themselves.
+/// Built from `triangles` (leaf order) and the leaves of `nodes` below `root`.
+std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
+                                  const std::vector<TriangleVerts>& triangles);
+
+/// Writes the rows of every leaf below `root` again, in place (the buffer keeps its address,
+/// which traversal views point into): after an update changed corners or regrouped leaves.
+/// `rows` must hold as many floats as make_leaf_rows made for these triangles.
+void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
+                       const std::vector<TriangleVerts>& triangles, std::vector<float>& rows);
+
+/// Writes the rows of one leaf again from `triangles` (leaf order) into `rows` (the whole
+/// buffer, padding included).
+void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, float* rows);
+
+}  // namespace rebraid

@@ -1,0 +1,129 @@
+// The pre-arranged leaf rows the SIMD triangle tests read (rebraid/bvh/leaf_rows.h): their
+// layout, and that every way of making or changing an object BVH keeps them in step.
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+#include "rebraid/bvh/leaf_rows.h"
+#include "rebraid/bvh/object_bvh_builder.h"
+#include "rebraid/core/error.h"
+#include "rebraid/generators/default_scene.h"
+#include "rebraid/generators/mesh_generators.h"
+#include "rebraid/generators/random_rays.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/top_level/flat_accel.h"
+#include "rebraid/top_level/instanced_accel.h"
+#include "support/hit_comparison.h"
+
+namespace rebraid {
+namespace {
+
+/// Every leaf below `ref`, in no particular order.
+void collect_leaves(const ObjectBvh& bvh, NodeRef ref, std::vector<NodeRef>& leaves) {
+    if (ref.is_leaf()) {
+        leaves.push_back(ref);
+        return;
+    }
+    for (const NodeRef child : bvh.nodes[ref.node_id()].children)
+        if (!child.is_empty()) collect_leaves(bvh, child, leaves);
+}
+
+TEST(LeafRows, HoldEachLeafsCornersAxisByAxisAfterPadding) {
+    BuildSettings settings;
+    settings.max_leaf_size = 8;
+    const Mesh mesh = make_torus_knot();
+    const ObjectBvh bvh = build_object_bvh(mesh, settings);
+    ASSERT_EQ(bvh.leaf_rows.size(), 9 * bvh.triangles.size() + 2 * kLeafRowPadding);
+    std::vector<NodeRef> leaves;
+    collect_leaves(bvh, bvh.root, leaves);
+    std::size_t checked = 0, wider_than_one = 0;
+    for (const NodeRef leaf : leaves) {
+        const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
+        wider_than_one += count > 1;
+        for (std::uint32_t i = 0; i < count; ++i) {
+            const TriangleVerts& t = bvh.triangles[first + i];
+            const Vec3f corners[3] = {t.v0, t.v1, t.v2};
+            for (int c = 0; c < 3; ++c)
+                for (int a = 0; a < 3; ++a) {
+                    const float row_value =
+                        bvh.leaf_rows[kLeafRowPadding + 9 * first + (3 * c + a) * count + i];
+                    ASSERT_EQ(row_value, corners[c][a]) << "leaf at " << first << ", triangle " << i
+                                                        << ", corner " << c << ", axis " << a;
+                }
+            ++checked;
+        }
+    }
+    EXPECT_EQ(checked, bvh.triangles.size());
+    EXPECT_GT(wider_than_one, 0u);  // the stride is a leaf's count, not always 1
+    for (std::uint32_t p = 0; p < kLeafRowPadding; ++p) {
+        EXPECT_EQ(bvh.leaf_rows[p], 0.0f);
+        EXPECT_EQ(bvh.leaf_rows[bvh.leaf_rows.size() - 1 - p], 0.0f);
+    }
+}
+
+TEST(LeafRows, RewritingInPlaceKeepsTheBufferAndRefusesAWrongSize) {
+    const ObjectBvh bvh = build_object_bvh(make_torus_knot(), {});
+    std::vector<float> rows(bvh.leaf_rows.size(), -1.0f);
+    const float* address = rows.data();
+    rewrite_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, rows);
+    EXPECT_EQ(rows.data(), address);
+    for (std::size_t i = kLeafRowPadding; i < rows.size() - kLeafRowPadding; ++i)
+        ASSERT_EQ(rows[i], bvh.leaf_rows[i]) << i;
+    std::vector<float> short_rows(rows.size() - 1);
+    EXPECT_THROW(rewrite_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, short_rows), Error);
+}
+
+/// Hits equal to the last bit, and the same occlusion answers.
+void expect_identical(const test::AccelAnswers& a, const test::AccelAnswers& b) {
+    ASSERT_EQ(a.hits.size(), b.hits.size());
+    std::size_t hits = 0, differences = 0;
+    for (std::size_t i = 0; i < a.hits.size(); ++i) {
+        const Hit& x = a.hits[i];
+        const Hit& y = b.hits[i];
+        hits += x.is_hit();
+        const bool same = std::bit_cast<std::uint32_t>(x.t) == std::bit_cast<std::uint32_t>(y.t) &&
+                          std::bit_cast<std::uint32_t>(x.u) == std::bit_cast<std::uint32_t>(y.u) &&
+                          std::bit_cast<std::uint32_t>(x.v) == std::bit_cast<std::uint32_t>(y.v) &&
+                          x.instance_id == y.instance_id && x.prim_id == y.prim_id &&
+                          a.occluded[i] == b.occluded[i];
+        if (!same && ++differences <= 5) ADD_FAILURE() << "ray " << i << " answers differ";
+    }
+    EXPECT_EQ(differences, 0u);
+    EXPECT_GT(hits, a.hits.size() / 10);  // enough hits for the comparison to mean something
+}
+
+// The kernels read the rows where they exist and the per-triangle corners where not (and for
+// re-braided BRefs of single triangles, which start inside a leaf): both give the same
+// answers, bit for bit, for the flat, two-level and re-braided structures.
+TEST(LeafRows, KernelsAnswerTheSameWithAndWithoutThem) {
+    const Scene scene = make_default_scene();
+    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 20000, 11);
+    BuildSettings with_rows, without_rows;
+    without_rows.pre_arranged_leaves = false;
+    {
+        const FlatAccel a(scene, with_rows), b(scene, without_rows);
+        EXPECT_FALSE(a.bvh().leaf_rows.empty());
+        EXPECT_TRUE(b.bvh().leaf_rows.empty());
+        expect_identical(test::trace_all(a, rays), test::trace_all(b, rays));
+    }
+    RebraidSettings single_triangles;
+    single_triangles.open_threshold = 0.0f;
+    single_triangles.budget_factor = 50.0f;
+    single_triangles.open_leaves = true;
+    for (const RebraidSettings& rebraid : {RebraidSettings{}, single_triangles}) {
+        const InstancedAccel a =
+            build_rebraid_accel(scene, own_object_bvh_builder(with_rows), rebraid);
+        const InstancedAccel b =
+            build_rebraid_accel(scene, own_object_bvh_builder(without_rows), rebraid);
+        expect_identical(test::trace_all(a, rays), test::trace_all(b, rays));
+    }
+    const InstancedAccel a = build_two_level_accel(scene, own_object_bvh_builder(with_rows));
+    const InstancedAccel b = build_two_level_accel(scene, own_object_bvh_builder(without_rows));
+    expect_identical(test::trace_all(a, rays), test::trace_all(b, rays));
+}
+
+}  // namespace
+}  // namespace rebraid
