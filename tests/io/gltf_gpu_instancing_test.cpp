@@ -553,6 +553,141 @@ TEST(GltfHiddenInstances, CollapsedHiddenPosesKeepTheLayout) {
     }
 }
 
+// ---- Writing hidden instances ------------------------------------------------------------------
+
+/// Loads `path` and checks it holds `original`'s instances in order: the same hidden ones (an
+/// identity instance of the hidden mesh), the others on the same mesh at (nearly, after a
+/// float T, R, S) the same transform; and that Embree answers rays on both alike.
+GltfLoadResult expect_round_trip(const GltfLoadResult& original, const std::string& path) {
+    const GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
+    const Scene& a = original.scene;
+    const Scene& b = loaded.scene;
+    EXPECT_EQ(loaded.report.hidden_instances, original.report.hidden_instances);
+    EXPECT_EQ(loaded.report.hidden_mesh, original.report.hidden_mesh);
+    EXPECT_EQ(b.meshes.size(), a.meshes.size());
+    EXPECT_TRUE(b.meshes.at(loaded.report.hidden_mesh).triangles.empty());
+    EXPECT_NO_THROW(b.validate());
+    if (b.instances.size() != a.instances.size()) {
+        ADD_FAILURE() << b.instances.size() << " instances, expected " << a.instances.size();
+        return loaded;
+    }
+    for (std::size_t i = 0; i < a.instances.size(); ++i) {
+        EXPECT_EQ(b.instances[i].mesh_id, a.instances[i].mesh_id) << "instance " << i;
+        const AffineTransform& ta = a.instances[i].object_to_world;
+        const AffineTransform& tb = b.instances[i].object_to_world;
+        expect_near(tb.col_x, ta.col_x, 1e-6f);
+        expect_near(tb.col_y, ta.col_y, 1e-6f);
+        expect_near(tb.col_z, ta.col_z, 1e-6f);
+        expect_near(tb.translation, ta.translation, 0);
+    }
+    const glue::EmbreeFlatAccel reference(a);
+    const std::vector<Ray> rays = test::varied_rays(reference, a.bounds(), 2000, 5);
+    test::expect_same_answers(a, rays, test::trace_all(reference, rays),
+                              test::trace_all(glue::EmbreeFlatAccel(b), rays),
+                              test::tolerance_for(a.bounds()));
+    return loaded;
+}
+
+/// Hidden instances 0, 2 and 4 (a zero node scale, a zero element SCALE, a zero y scale)
+/// around shown instances 1 and 3 of one mesh (mesh 1 is the loader's hidden mesh).
+GltfLoadResult load_hidden_instances_file() {
+    GltfTestFile file = triangle_file();
+    const int scale = add_values<float>(file, {1, 1, 1, 0, 0, 0, 2, 2, 2}, test::kFloat, 3, "VEC3");
+    file.add_node({{"mesh", 0}, {"scale", {0, 0, 0}}, {"translation", {0, 0, 5}}});
+    file.add_node({{"mesh", 0}, {"extensions", instancing({{"SCALE", scale}})}});
+    file.add_node({{"mesh", 0}, {"scale", {1, 0, 1}}, {"translation", {0, 0, 5}}});
+    file.add_scene({0, 1, 2});
+    return load_gltf_scene_with_report(file.write_glb("hidden_to_write.glb"));
+}
+
+TEST(GltfHiddenInstances, WrittenAsZeroScaleNodesTheyLoadBackHidden) {
+    const GltfLoadResult original = load_hidden_instances_file();
+    ASSERT_EQ(original.report.hidden_instances, (std::vector<std::uint32_t>{0, 2, 4}));
+    for (const char* name : {"hidden_nodes.glb", "hidden_nodes.gltf"}) {
+        SCOPED_TRACE(name);
+        const std::string path = test::scratch_path(name);
+        write_gltf_scene(original.scene, path);
+        const GltfLoadResult loaded = expect_round_trip(original, path);
+        // One node per instance; the hidden ones have a zero scale and the triangle mesh.
+        ASSERT_EQ(loaded.model->nodes.size(), 5u);
+        EXPECT_EQ(loaded.model->meshes.size(), 1u);
+        for (int n : {0, 2, 4}) {
+            EXPECT_EQ(loaded.model->nodes[n].scale, (std::vector<double>{0, 0, 0}));
+            EXPECT_EQ(loaded.model->nodes[n].mesh, 0);
+        }
+    }
+}
+
+TEST(GltfHiddenInstances, WrittenAsZeroScaleElementsTheyLoadBackHidden) {
+    const GltfLoadResult original = load_hidden_instances_file();
+    for (const char* name : {"hidden_elements.glb", "hidden_elements.gltf"}) {
+        SCOPED_TRACE(name);
+        const std::string path = test::scratch_path(name);
+        write_gltf_scene(original.scene, path, {.gpu_instancing = true});
+        const GltfLoadResult loaded = expect_round_trip(original, path);
+        // The hidden instances join the run of the shown ones: one node, five elements.
+        ASSERT_EQ(loaded.model->nodes.size(), 1u);
+        EXPECT_EQ(loaded.report.instance_gpu_elements, (std::vector<std::uint32_t>{0, 1, 2, 3, 4}));
+    }
+    // Instances of another mesh end a run (hidden instances join the run before); a run of
+    // one instance is a node of its own.
+    Scene scene = original.scene;
+    scene.meshes.insert(scene.meshes.begin() + 1, scene.meshes[0]);  // mesh 1: another triangle
+    scene.meshes[1].name = "second";
+    for (Instance& instance : scene.instances)
+        if (instance.mesh_id == 1) instance.mesh_id = 2;  // the hidden mesh, still last
+    scene.instances[3].mesh_id = 1;
+    scene.instances.pop_back();
+    const std::string path = test::scratch_path("hidden_two_meshes.glb");
+    write_gltf_scene(scene, path, {.gpu_instancing = true});
+    const GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
+    EXPECT_EQ(loaded.report.instance_gpu_elements,
+              (std::vector<std::uint32_t>{0, 1, 2, kNotGpuInstanced}));
+    EXPECT_EQ(loaded.report.hidden_instances, (std::vector<std::uint32_t>{0, 2}));
+    ASSERT_EQ(loaded.scene.instances.size(), scene.instances.size());
+    for (std::size_t i = 0; i < scene.instances.size(); ++i)
+        EXPECT_EQ(loaded.scene.instances[i].mesh_id, scene.instances[i].mesh_id) << i;
+}
+
+TEST(GltfHiddenInstances, WriterHidesSingularTransformsAndRefusesWhatCannotRoundTrip) {
+    Scene scene;
+    scene.meshes.push_back({"tri", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}});
+    scene.instances = {{0, AffineTransform::translate({0, 0, 1})},
+                       {0, AffineTransform::scale({1, 1, 0})},
+                       {0, AffineTransform::scale({1e-11f, 1e-11f, 1e-11f})},
+                       {0, AffineTransform::translate({2, 0, 0})}};
+    EXPECT_THROW(scene.validate(), Error);
+    EXPECT_NO_THROW(scene.validate(SingularTransforms::allowed));
+    for (bool gpu_instancing : {false, true}) {
+        SCOPED_TRACE(gpu_instancing ? "gpu instancing" : "nodes");
+        const std::string path = test::scratch_path("hidden_singular.glb");
+        write_gltf_scene(scene, path, {.gpu_instancing = gpu_instancing});
+        const GltfLoadResult loaded = load_gltf_scene_with_report(path);
+        EXPECT_EQ(loaded.report.hidden_instances, (std::vector<std::uint32_t>{1, 2}));
+        ASSERT_EQ(loaded.scene.instances.size(), 4u);
+        EXPECT_EQ(loaded.scene.instances[3].mesh_id, 0u);
+        EXPECT_EQ(loaded.scene.instances[2].mesh_id, loaded.report.hidden_mesh);
+    }
+    auto expect_write_error = [](const Scene& bad, const std::string& phrase) {
+        try {
+            write_gltf_scene(bad, test::scratch_path("bad_hidden.glb"));
+            ADD_FAILURE() << "no error (expected '" << phrase << "')";
+        } catch (const Error& error) {
+            EXPECT_NE(std::string(error.what()).find(phrase), std::string::npos) << error.what();
+        }
+    };
+    Scene only_hidden;
+    only_hidden.meshes.push_back({"hidden", {}, {}});
+    only_hidden.instances.push_back({0, AffineTransform::identity()});
+    expect_write_error(only_hidden, "no mesh has triangles");
+    Scene unused_empty = scene;
+    unused_empty.meshes.push_back({"unused", {}, {}});
+    expect_write_error(unused_empty, "mesh 1 ('unused') has no triangles and no instance");
+    Scene not_finite = scene;
+    not_finite.instances[1].object_to_world.col_x.x = std::numeric_limits<float>::infinity();
+    expect_write_error(not_finite, "instance 1 has a non-finite transform");
+}
+
 // ---- KHR_mesh_quantization positions ----------------------------------------------------------
 
 TEST(GltfQuantization, BytesAndShortsAreDequantizedAsTheAccessorSays) {
