@@ -41,7 +41,7 @@ BBox3f Scene::bounds() const {
     return box;
 }
 
-void Scene::validate() const {
+void Scene::validate(SingularTransforms singular) const {
     for (std::size_t m = 0; m < meshes.size(); ++m) {
         const Mesh& mesh = meshes[m];
         for (std::size_t v = 0; v < mesh.positions.size(); ++v)
@@ -67,7 +67,8 @@ void Scene::validate() const {
             throw Error("scene: instance " + std::to_string(i) + " has a non-finite transform");
         // Rays are mapped into object space with the inverse: a singular map has none.
         const float det = xfm.determinant();
-        if (!std::isfinite(det) || std::fabs(det) < 1e-30f)
+        if (!std::isfinite(det) ||
+            (singular == SingularTransforms::rejected && is_singular_transform(xfm)))
             throw Error("scene: instance " + std::to_string(i) +
                         " has a singular transform (determinant " + std::to_string(det) + ")");
     }

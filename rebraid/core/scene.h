@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -28,10 +29,27 @@ struct Mesh {
     }
 };
 
+/// Instance transforms whose |determinant| is below this are singular: they have no inverse
+/// to map rays into object space with. Scene::validate() rejects them; the glTF loader and
+/// animator hide such an instance instead (README "Conventions", hidden instances).
+inline constexpr float kMinInstanceDeterminant = 1e-30f;
+
+/// True when `transform` is singular: |determinant| below kMinInstanceDeterminant (or not a
+/// number). Check AffineTransform::is_finite() first where a non-finite map is an error.
+inline bool is_singular_transform(const AffineTransform& transform) {
+    return !(std::fabs(transform.determinant()) >= kMinInstanceDeterminant);
+}
+
 /// One placement of a mesh in the world. Several instances may share a mesh.
 struct Instance {
     MeshId mesh_id = 0;
     AffineTransform object_to_world;
+};
+
+/// Whether Scene::validate() accepts singular instance transforms.
+enum class SingularTransforms {
+    rejected,  ///< an error: every structure maps rays with the inverse transform
+    allowed,   ///< accepted (write_gltf_scene() writes such an instance hidden)
 };
 
 /// Meshes and their instances: the input of every structure in the project.
@@ -49,9 +67,10 @@ struct Scene {
     BBox3f bounds() const;
 
     /// Throws rebraid::Error naming the first problem: an instance referencing a missing
-    /// mesh, a non-finite or singular transform, a triangle index past its mesh's positions,
-    /// a non-finite vertex position. Degenerate triangles are legal (they never produce hits).
-    void validate() const;
+    /// mesh, a non-finite or (unless `singular` allows it) singular transform, a triangle
+    /// index past its mesh's positions, a non-finite vertex position. Degenerate triangles
+    /// are legal (they never produce hits).
+    void validate(SingularTransforms singular = SingularTransforms::rejected) const;
 };
 
 }  // namespace rebraid

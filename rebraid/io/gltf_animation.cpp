@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <utility>
 
 #include "rebraid/core/error.h"
 #include "rebraid/io/gltf_animation_channels.h"
@@ -64,14 +65,20 @@ struct GltfAnimator::Data {
 
     std::vector<std::uint32_t> instance_nodes;  ///< glTF node per instance
     std::vector<bool> instance_is_skinned;
-    std::vector<MeshId> loaded_mesh_ids;  ///< Mesh per instance in the loader's layout
-    std::vector<MeshId> mesh_ids;         ///< Mesh per instance in the prepared layout
+    std::vector<bool> instance_is_hideable;  ///< per instance: some pose may hide it
+    std::vector<MeshId> loaded_mesh_ids;     ///< Mesh per instance in the loader's layout
+    std::vector<MeshId> mesh_ids;            ///< Mesh per instance in the prepared layout
     std::size_t loaded_mesh_count = 0;
     std::vector<MeshId> copy_sources;  ///< loaded Mesh of each appended copy, in order
 
     std::vector<MeshId> deformed_meshes;
     std::vector<InstanceId> moving_instances;
     MeshId hidden_mesh = kNoHiddenMesh;  ///< the loader's empty mesh of hidden instances
+    std::vector<InstanceId> hideable_instances;
+    /// The empty mesh that hidden poses use in the prepared layout (GltfHiddenPose::
+    /// empty_mesh): the loader's, else one appended after the copies (appends_hidden_mesh).
+    MeshId pose_hidden_mesh = kNoHiddenMesh;
+    bool appends_hidden_mesh = false;
     /// Per moving instance, its EXT_mesh_gpu_instancing element's T * R * S below its node
     /// (the identity for an instance of a node without the extension).
     std::vector<Affine3d> moving_element_transforms;
@@ -83,9 +90,24 @@ void GltfAnimationSettings::validate() const {
                     ", expected an animation index or -1 for all");
     if (parallel_grain == 0)
         throw Error("GltfAnimationSettings: parallel_grain = 0, expected at least 1");
+    if (hidden_pose != GltfHiddenPose::empty_mesh && hidden_pose != GltfHiddenPose::collapsed_mesh)
+        throw Error("GltfAnimationSettings: hidden_pose = " + std::to_string(int(hidden_pose)) +
+                    ", expected empty_mesh or collapsed_mesh");
 }
 
 namespace {
+
+/// Margin over kMinInstanceDeterminant for the bound of hideable instances: the float
+/// transform's determinant may round a little below the double product of the bounds.
+constexpr double kHideableMargin = 2.0;
+
+double determinant(const Affine3d& m) {
+    const Vec3d& x = m.columns[0];
+    const Vec3d& y = m.columns[1];
+    const Vec3d& z = m.columns[2];
+    return x[0] * (y[1] * z[2] - y[2] * z[1]) - y[0] * (x[1] * z[2] - x[2] * z[1]) +
+           z[0] * (x[1] * y[2] - x[2] * y[1]);
+}
 
 class AnimatorBuilder {
 public:
@@ -103,6 +125,7 @@ public:
         read_channels();
         read_instances();
         assign_meshes();
+        place_hidden_mesh();
         for (DeformingInstance& instance : data_.deforming) read_deformation(instance);
         collect_changing_parts();
         return std::make_unique<const GltfAnimator::Data>(std::move(data_));
@@ -147,6 +170,45 @@ private:
             }
         }
         data_.dynamic_nodes = nodes_below(data_.nodes, data_.has_trs_channel);
+        read_scale_bounds();
+    }
+
+    /// Per node, a lower bound of |determinant| of its local transform over all times: the
+    /// product of its scale channels' smallest magnitudes per axis (where two animations
+    /// drive it, the smaller), else of its rest transform (rotations keep the determinant).
+    void read_scale_bounds() {
+        const std::size_t node_count = data_.nodes.node_count();
+        std::vector<Vec3d> scale_bounds(node_count, Vec3d{-1, -1, -1});
+        for (const AnimationChannel& channel : data_.animation.channels) {
+            if (channel.path != ChannelPath::kScale) continue;
+            const KeyframeTrack& track = data_.animation.tracks[channel.track];
+            Vec3d& bound = scale_bounds[channel.node];
+            for (std::size_t c = 0; c < 3; ++c) {
+                const double magnitude = track.min_magnitude(c);
+                bound[c] = bound[c] < 0 ? magnitude : std::min(bound[c], magnitude);
+            }
+        }
+        node_determinant_bounds_.resize(node_count);
+        for (std::size_t n = 0; n < node_count; ++n) {
+            const Vec3d& bound = scale_bounds[n];
+            node_determinant_bounds_[n] = bound[0] < 0
+                                              ? std::fabs(determinant(data_.nodes.rest_local[n]))
+                                              : bound[0] * bound[1] * bound[2];
+        }
+        is_dynamic_node_.assign(node_count, false);
+        for (std::uint32_t n : data_.dynamic_nodes) is_dynamic_node_[n] = true;
+    }
+
+    /// True when a pose may make moving instance `i`'s transform singular: the product of the
+    /// determinant bounds of its node chain and its GPU-instancing element comes near
+    /// kMinInstanceDeterminant.
+    bool may_hide(InstanceId i) {
+        const std::uint32_t node = data_.instance_nodes[i];
+        if (!is_dynamic_node_[node]) return false;
+        double bound = std::fabs(determinant(element_transform(i)));
+        for (std::uint32_t n = node; n != kNoParent; n = data_.nodes.parent[n])
+            bound *= node_determinant_bounds_[n];
+        return !(bound >= kHideableMargin * double(kMinInstanceDeterminant));
     }
 
     void read_instances() {
@@ -165,6 +227,9 @@ private:
         data_.instance_nodes = instance_nodes;
         data_.loaded_mesh_count = scene.meshes.size();
         data_.instance_is_skinned.assign(scene.instances.size(), false);
+        data_.instance_is_hideable.assign(scene.instances.size(), false);
+        is_deforming_.assign(scene.instances.size(), false);
+        const bool collapses = data_.settings.hidden_pose == GltfHiddenPose::collapsed_mesh;
         for (InstanceId i = 0; i < scene.instances.size(); ++i) {
             const MeshId mesh = scene.instances[i].mesh_id;
             data_.loaded_mesh_ids.push_back(mesh);
@@ -172,7 +237,14 @@ private:
             // A hidden instance stays hidden: its empty mesh is never skinned or morphed.
             const bool is_skinned = node.skin >= 0 && mesh != data_.hidden_mesh;
             data_.instance_is_skinned[i] = is_skinned;
-            if (!is_skinned && mesh_target_counts_[mesh] == 0) continue;
+            // A skinned instance is posed by its joints, whatever its node's transform.
+            const bool is_hideable = !is_skinned && mesh != data_.hidden_mesh && may_hide(i);
+            data_.instance_is_hideable[i] = is_hideable;
+            if (is_hideable) data_.hideable_instances.push_back(i);
+            // Collapsed hidden poses move the vertices of a Mesh of the instance's own.
+            if (!is_skinned && mesh_target_counts_[mesh] == 0 && !(is_hideable && collapses))
+                continue;
+            is_deforming_[i] = true;
             DeformingInstance instance;
             instance.instance = i;
             instance.node = instance_nodes[i];
@@ -195,7 +267,7 @@ private:
         data_.mesh_ids = data_.loaded_mesh_ids;
         std::vector<bool> is_taken(data_.loaded_mesh_count, false);
         for (InstanceId i = 0; i < data_.loaded_mesh_ids.size(); ++i)
-            if (!data_.instance_is_skinned[i] && mesh_target_counts_[data_.loaded_mesh_ids[i]] == 0)
+            if (!is_deforming_[i])
                 is_taken[data_.loaded_mesh_ids[i]] = true;  // a static user keeps the rest pose
         MeshId next_copy = MeshId(data_.loaded_mesh_count);
         for (DeformingInstance& instance : data_.deforming) {
@@ -209,6 +281,17 @@ private:
                 data_.mesh_ids[instance.instance] = instance.target_mesh;
             }
         }
+    }
+
+    /// The empty mesh of hidden poses: the loader's, else (empty_mesh poses of hideable
+    /// instances) a new one after the copies.
+    void place_hidden_mesh() {
+        data_.pose_hidden_mesh = data_.hidden_mesh;
+        if (data_.hidden_mesh != kNoHiddenMesh || data_.hideable_instances.empty() ||
+            data_.settings.hidden_pose != GltfHiddenPose::empty_mesh)
+            return;
+        data_.pose_hidden_mesh = MeshId(data_.loaded_mesh_count + data_.copy_sources.size());
+        data_.appends_hidden_mesh = true;
     }
 
     DeformSource& source_of_mesh(MeshId mesh, std::uint32_t& index) {
@@ -289,7 +372,9 @@ private:
                 data_.moving_element_transforms.push_back(element_transform(i));
             }
         for (const DeformingInstance& instance : data_.deforming) {
-            bool changes = instance.weight_slot != kNone;
+            // A collapsed hidden pose moves every vertex of a hideable instance.
+            bool changes =
+                instance.weight_slot != kNone || data_.instance_is_hideable[instance.instance];
             if (instance.skin != kNone) {
                 // Unweighted vertices follow the node itself, the rest follow the joints.
                 changes = changes || is_dynamic[instance.node];
@@ -305,6 +390,9 @@ private:
     const tinygltf::Model& model_;
     GltfAnimator::Data data_;
     std::vector<std::size_t> mesh_target_counts_;
+    std::vector<double> node_determinant_bounds_;  ///< per node, see read_scale_bounds()
+    std::vector<bool> is_dynamic_node_;
+    std::vector<bool> is_deforming_;  ///< per instance: in data_.deforming
     std::map<int, std::uint32_t> skin_index_of_id_;
     std::map<MeshId, std::uint32_t> source_index_of_mesh_;
     std::map<std::uint32_t, std::unique_ptr<GltfGpuInstancing>> gpu_instancing_of_node_;
@@ -429,8 +517,15 @@ const std::vector<InstanceId>& GltfAnimator::moving_instances() const {
 const std::vector<MeshId>& GltfAnimator::mesh_ids() const {
     return data_->mesh_ids;
 }
+const std::vector<InstanceId>& GltfAnimator::hideable_instances() const {
+    return data_->hideable_instances;
+}
+MeshId GltfAnimator::hidden_mesh() const {
+    return data_->pose_hidden_mesh;
+}
 std::size_t GltfAnimator::mesh_count() const {
-    return data_->loaded_mesh_count + data_->copy_sources.size();
+    return data_->loaded_mesh_count + data_->copy_sources.size() +
+           (data_->appends_hidden_mesh ? 1 : 0);
 }
 
 void GltfAnimator::prepare_scene(Scene& scene) const {
@@ -440,15 +535,16 @@ void GltfAnimator::prepare_scene(Scene& scene) const {
         throw Error(prefix + "the scene has " + std::to_string(scene.instances.size()) +
                     " instances, the animated file has " + std::to_string(data.mesh_ids.size()));
     const bool is_loaded_layout =
-        !data.copy_sources.empty() && scene.meshes.size() == data.loaded_mesh_count;
+        mesh_count() != data.loaded_mesh_count && scene.meshes.size() == data.loaded_mesh_count;
     if (!is_loaded_layout && scene.meshes.size() != mesh_count())
         throw Error(prefix + "the scene has " + std::to_string(scene.meshes.size()) +
                     " meshes, the animated file has " + std::to_string(data.loaded_mesh_count) +
                     " (" + std::to_string(mesh_count()) +
-                    " with the copies of shared deforming meshes)");
+                    " with the copies of shared deforming meshes and the hidden poses' mesh)");
     for (InstanceId i = 0; i < scene.instances.size(); ++i) {
         const MeshId mesh = scene.instances[i].mesh_id;
-        if (mesh != data.loaded_mesh_ids[i] && mesh != data.mesh_ids[i])
+        const bool is_hidden_pose = data.instance_is_hideable[i] && mesh == data.pose_hidden_mesh;
+        if (mesh != data.loaded_mesh_ids[i] && mesh != data.mesh_ids[i] && !is_hidden_pose)
             throw Error(prefix + "instance " + std::to_string(i) + " uses mesh " +
                         std::to_string(mesh) + ", expected " + std::to_string(data.mesh_ids[i]));
     }
@@ -459,9 +555,16 @@ void GltfAnimator::prepare_scene(Scene& scene) const {
             copy.name += " (copy " + std::to_string(scene.meshes.size()) + ")";
             scene.meshes.push_back(std::move(copy));
         }
+        if (data.appends_hidden_mesh) {
+            Mesh empty;
+            empty.name = "hidden";
+            scene.meshes.push_back(std::move(empty));
+        }
     }
+    // An instance hidden by an earlier pose stays so (with the identity) until apply().
     for (InstanceId i = 0; i < scene.instances.size(); ++i)
-        scene.instances[i].mesh_id = data.mesh_ids[i];
+        if (!(data.instance_is_hideable[i] && scene.instances[i].mesh_id == data.pose_hidden_mesh))
+            scene.instances[i].mesh_id = data.mesh_ids[i];
     for (const DeformingInstance& instance : data.deforming) {
         const std::size_t expected = data.sources[instance.source].base_positions.size();
         const std::size_t actual = scene.meshes[instance.target_mesh].positions.size();
@@ -486,14 +589,32 @@ void GltfAnimator::apply(float time, Scene& scene) const {
     }
     const PoseState pose = evaluate_pose(data, t);
 
+    // Instances this pose hides, and where each shrank to (its collapsed vertices' point).
+    std::vector<std::pair<InstanceId, Vec3f>> hidden;
+    const bool collapses = data.settings.hidden_pose == GltfHiddenPose::collapsed_mesh;
     for (std::size_t k = 0; k < data.moving_instances.size(); ++k) {
         const InstanceId i = data.moving_instances[k];
-        AffineTransform& transform = scene.instances[i].object_to_world;
+        Instance& instance = scene.instances[i];
+        AffineTransform& transform = instance.object_to_world;
         transform =
             (pose.world[data.instance_nodes[i]] * data.moving_element_transforms[k]).to_float();
         // A hidden instance draws nothing, whatever its pose; the scene needs an invertible map.
-        if (data.mesh_ids[i] == data.hidden_mesh && !(std::fabs(transform.determinant()) >= 1e-30f))
-            transform = AffineTransform::identity();
+        if (data.mesh_ids[i] == data.hidden_mesh) {
+            if (is_singular_transform(transform)) transform = AffineTransform::identity();
+            continue;
+        }
+        instance.mesh_id = data.mesh_ids[i];
+        // A non-finite transform is left for Scene::validate() to report.
+        if (!transform.is_finite() || !is_singular_transform(transform)) continue;
+        if (!data.instance_is_hideable[i])
+            throw Error(data.error_prefix + "apply: instance " + std::to_string(i) + " (node " +
+                        std::to_string(data.instance_nodes[i]) + ") has a singular transform " +
+                        "at time " + std::to_string(time) +
+                        " s, which the bounds of its scale channels exclude");
+        // Hidden as the loader hides a singular instance: never hit, its number kept.
+        hidden.emplace_back(i, transform.translation);
+        transform = AffineTransform::identity();
+        if (!collapses) instance.mesh_id = data.pose_hidden_mesh;
     }
     for (InstanceId i = 0; i < scene.instances.size(); ++i)
         if (data.instance_is_skinned[i])  // glTF: the skinned node's own transform is ignored
@@ -503,6 +624,12 @@ void GltfAnimator::apply(float time, Scene& scene) const {
         const DeformingInstance& instance = data.deforming[d];
         pose_instance(data, pose, instance, scene.meshes[instance.target_mesh].positions);
     });
+    // Collapsed: every vertex at one point, so every triangle is degenerate.
+    if (collapses)
+        for (const auto& [i, point] : hidden) {
+            std::vector<Vec3f>& positions = scene.meshes[data.mesh_ids[i]].positions;
+            std::fill(positions.begin(), positions.end(), point);
+        }
 }
 
 }  // namespace rebraid

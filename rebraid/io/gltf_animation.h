@@ -11,6 +11,18 @@
 
 namespace rebraid {
 
+/// How GltfAnimator::apply() stores an instance that a pose hides (see GltfAnimator).
+enum class GltfHiddenPose {
+    /// As the loader stores a hidden instance: the identity transform and an empty Mesh
+    /// (GltfAnimator::hidden_mesh()). The instance's MeshId changes while it is hidden: for
+    /// a scene posed once and then built (`rebraid trace --time`, `rebraid render`).
+    empty_mesh,
+    /// A layout that never changes, as AnimatedObject requires: the instance has a Mesh of
+    /// its own, listed in deformed_meshes(), whose vertices all move to one point while it
+    /// is hidden (degenerate triangles are never hit), with the identity transform.
+    collapsed_mesh,
+};
+
 /// Which glTF animation plays and how times outside it are treated.
 struct GltfAnimationSettings {
     /// Index of the animation in the file's `animations`; -1 plays all of them at once (where
@@ -23,6 +35,8 @@ struct GltfAnimationSettings {
     /// Vertices per parallel task when skinning and morphing; meshes with fewer vertices are
     /// posed serially. Has no effect on the result, only on speed.
     std::size_t parallel_grain = 4096;
+    /// How a pose hides an instance (GltfHiddenPose).
+    GltfHiddenPose hidden_pose = GltfHiddenPose::empty_mesh;
     /// Names the animated file in error messages (e.g. the path given to the loader); empty:
     /// messages name no file.
     std::string file_label{};
@@ -50,6 +64,16 @@ struct GltfAnimationSettings {
 /// holds skinned meshes in their object-space bind pose: apply() once before building
 /// anything from a scene with skins or morph targets.
 ///
+/// Hidden poses: an instance that is visible at rest but whose animated scale (of its node or
+/// a node above it) makes its posed transform singular (|determinant| < 1e-30, as exporters
+/// animate a scale to 0 to hide an object) is hidden in that pose, as the loader hides a
+/// statically singular instance: it keeps its number and is never hit
+/// (settings.hidden_pose says how). It shows again in poses where its transform is regular.
+/// hideable_instances() lists the instances whose scale channels may reach such a pose (a
+/// key of 0, a sign change, a spline that may dip to 0); only they ever hide. With
+/// GltfHiddenPose::collapsed_mesh they count as deforming instances (a Mesh of their own, in
+/// deformed_meshes()). An instance the loader hid stays hidden in every pose.
+///
 /// Skin weights are rescaled to sum 1 per vertex; a vertex with no weight at all follows the
 /// skinned node's own world transform (its rest placement).
 ///
@@ -74,7 +98,8 @@ public:
     bool animated() const;
 
     /// Brings `scene` (the loaded scene, or a copy of it) into the animator's layout: appends
-    /// the Mesh copies of shared deforming meshes and points their instances at them. Does
+    /// the Mesh copies of shared deforming meshes (and the hidden poses' empty Mesh) and
+    /// points their instances at them. Does
     /// nothing when the scene is already in that layout. Throws rebraid::Error when `scene`
     /// does not come from the animated file (instance or mesh counts differ).
     void prepare_scene(Scene& scene) const;
@@ -92,9 +117,17 @@ public:
     /// Instances whose transform changes over time (ascending). Skinned instances are never
     /// in it (their transform is the identity).
     const std::vector<InstanceId>& moving_instances() const;
-    /// Mesh of every instance in the prepared layout (index = InstanceId).
+    /// Mesh of every instance in the prepared layout (index = InstanceId); with
+    /// GltfHiddenPose::empty_mesh, a hidden instance uses hidden_mesh() while it is hidden.
     const std::vector<MeshId>& mesh_ids() const;
-    /// Number of meshes in the prepared layout (loaded meshes plus copies).
+    /// Moving instances that some pose may hide (ascending; see "Hidden poses").
+    const std::vector<InstanceId>& hideable_instances() const;
+    /// The empty Mesh of hidden instances in the prepared layout: the loader's, or with
+    /// GltfHiddenPose::empty_mesh and hideable instances, one appended after the copies;
+    /// kNoHiddenMesh when there is none.
+    MeshId hidden_mesh() const;
+    /// Number of meshes in the prepared layout (loaded meshes plus copies and, for hidden
+    /// poses, an empty mesh).
     std::size_t mesh_count() const;
 
     struct Data;  ///< everything read from the file (defined in gltf_animation.cpp)

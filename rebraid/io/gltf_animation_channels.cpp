@@ -69,6 +69,35 @@ void KeyframeTrack::sample(double time, double* out) const {
     }
 }
 
+double KeyframeTrack::min_magnitude(std::size_t c) const {
+    const bool is_cubic = interpolation == Interpolation::kCubicSpline;
+    const std::size_t values_per_key = is_cubic ? 3 : 1;
+    auto at = [&](std::size_t key, std::size_t part) {
+        return double(values[(key * values_per_key + (is_cubic ? part : 0)) * width + c]);
+    };
+    // Outside the keys the samples clamp to the first and last key values.
+    double bound = std::fabs(at(0, 1));
+    for (std::size_t k = 0; k + 1 < times.size(); ++k) {
+        const double a = at(k, 1), b = at(k + 1, 1);
+        if (interpolation == Interpolation::kStep) {  // holds each key's value
+            bound = std::min(bound, std::fabs(b));
+            continue;
+        }
+        // Between two keys of one sign LINEAR stays between them; else it crosses zero.
+        if (!((a > 0 && b > 0) || (a < 0 && b < 0))) return 0;
+        double segment = std::min(std::fabs(a), std::fabs(b));
+        if (is_cubic) {
+            // The Hermite weights of the two values are in [0, 1] and sum to 1; those of the
+            // tangents (times the key interval) stay within 4/27 in magnitude.
+            const double key_delta = double(times[k + 1]) - double(times[k]);
+            segment -= 4.0 / 27.0 * key_delta * (std::fabs(at(k, 2)) + std::fabs(at(k + 1, 0)));
+        }
+        if (!(segment > 0)) return 0;
+        bound = std::min(bound, segment);
+    }
+    return bound;
+}
+
 namespace {
 
 class ChannelReader {

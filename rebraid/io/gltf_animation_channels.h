@@ -33,6 +33,10 @@ struct KeyframeTrack {
     /// The track's value at `time` into out[0, width): clamped to the first / last key
     /// outside the keys; rotations are unit quaternions.
     void sample(double time, double* out) const;
+    /// A lower bound of |component `c`| of sample() over all times: 0 when the component may
+    /// reach zero (a key of 0, a sign change between keys, a spline that may dip to 0).
+    /// Meant for scale tracks (not rotations, whose samples are normalized).
+    double min_magnitude(std::size_t c) const;
 };
 
 /// A channel: which node property is driven by which track.

@@ -39,6 +39,8 @@ std::unique_ptr<AnimatedObject> load_gltf_animated_object(const std::string& pat
                                                           const GltfAnimationSettings& settings) {
     GltfAnimationSettings labelled = settings;
     if (labelled.file_label.empty()) labelled.file_label = path;
+    // AnimatedObject keeps its layout from frame to frame: a hidden pose collapses a mesh.
+    labelled.hidden_pose = GltfHiddenPose::collapsed_mesh;
     GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
     auto object = std::make_unique<GltfAnimatedObject>(std::move(loaded), labelled);
     if (!(object->duration() > 0.0f) ||

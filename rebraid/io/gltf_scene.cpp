@@ -22,9 +22,6 @@
 namespace rebraid {
 namespace {
 
-// Scene::validate() refuses instances whose |determinant| is below this (no inverse).
-constexpr float kMinDeterminant = 1e-30f;
-
 // Mesh::Triangle holds 32-bit vertex indices, so no mesh may have more positions than this.
 constexpr std::uint64_t kMaxMeshPositions = std::numeric_limits<std::uint32_t>::max();
 
@@ -469,8 +466,7 @@ private:
                  " instances");
         // A zero scale is how exporters hide an object: such an instance keeps its number
         // but draws the empty hidden mesh (a singular map has no inverse to trace with).
-        const float determinant = object_to_world.determinant();
-        if (!(std::fabs(determinant) >= kMinDeterminant)) {
+        if (is_singular_transform(object_to_world)) {
             result_.report.hidden_instances.push_back(
                 std::uint32_t(result_.scene.instances.size()));
             result_.scene.instances.push_back({hidden_mesh(), AffineTransform::identity()});

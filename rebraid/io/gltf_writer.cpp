@@ -34,7 +34,11 @@ public:
         model_.asset.version = "2.0";
         model_.asset.generator = "rebraid write_gltf_scene";
         model_.buffers.resize(1);
-        for (std::size_t m = 0; m < scene_.meshes.size(); ++m) add_mesh(scene_.meshes[m]);
+        // Meshes without triangles are left out: only hidden instances use them.
+        for (const Mesh& mesh : scene_.meshes) {
+            gltf_mesh_ids_.push_back(mesh.triangles.empty() ? -1 : int(model_.meshes.size()));
+            if (!mesh.triangles.empty()) add_mesh(mesh);
+        }
         add_nodes();
         if (extension == ".glb")
             write_binary();
@@ -56,20 +60,28 @@ private:
 
     void check_scene() const {
         try {
-            scene_.validate();
+            // Singular transforms are written as hidden instances.
+            scene_.validate(SingularTransforms::allowed);
         } catch (const Error& error) {
             fail(std::string("invalid scene: ") + error.what());
         }
         // The loader rejects a scene without instances, and a glTF mesh needs a primitive.
         if (scene_.instances.empty()) fail("the scene has no instances");
+        std::vector<bool> is_used(scene_.meshes.size(), false);
+        for (const Instance& instance : scene_.instances) is_used[instance.mesh_id] = true;
         std::uint64_t bytes = 0;
+        bool has_triangles = false;
         for (std::size_t m = 0; m < scene_.meshes.size(); ++m) {
             const Mesh& mesh = scene_.meshes[m];
-            if (mesh.triangles.empty())
+            // An empty mesh comes back only as the loader's mesh of hidden instances.
+            if (mesh.triangles.empty() && !is_used[m])
                 fail("mesh " + std::to_string(m) + " ('" + mesh.name +
-                     "') has no triangles, which glTF cannot store");
+                     "') has no triangles and no instance, which glTF cannot store");
+            has_triangles = has_triangles || !mesh.triangles.empty();
             bytes += mesh.positions.size() * sizeof(Vec3f) + mesh.triangles.size() * 12 + 8;
         }
+        if (!has_triangles)
+            fail("no mesh has triangles: the nodes of hidden instances need a glTF mesh");
         if (bytes > kMaxBufferBytes)
             fail("the meshes need " + std::to_string(bytes) + " bytes, more than glTF's limit");
     }
@@ -142,10 +154,32 @@ private:
         model_.meshes.push_back(gltf_mesh);
     }
 
+    /// Hidden: an instance of a mesh without triangles or with a singular transform. It is
+    /// never hit, so it is written as the loader reads a hidden instance back: a zero scale.
+    bool is_hidden(const Instance& instance) const {
+        return gltf_mesh_ids_[instance.mesh_id] < 0 ||
+               is_singular_transform(instance.object_to_world);
+    }
+
+    /// The glTF mesh a node of `instance` references: its own, or for an instance of a mesh
+    /// without triangles the first glTF mesh (a hidden node draws none, but needs one).
+    int gltf_mesh_of(const Instance& instance) const {
+        return std::max(gltf_mesh_ids_[instance.mesh_id], 0);
+    }
+
+    /// A node with a zero scale, hiding `instance`.
+    int add_hidden_node(const Instance& instance) {
+        tinygltf::Node node;
+        node.mesh = gltf_mesh_of(instance);
+        node.scale = {0.0, 0.0, 0.0};
+        model_.nodes.push_back(std::move(node));
+        return static_cast<int>(model_.nodes.size() - 1);
+    }
+
     int add_matrix_node(const Instance& instance) {
         const AffineTransform& t = instance.object_to_world;
         tinygltf::Node node;
-        node.mesh = static_cast<int>(instance.mesh_id);
+        node.mesh = gltf_mesh_of(instance);
         // Column-major 4x4 with bottom row (0 0 0 1); floats widen to double exactly.
         node.matrix = {t.col_x.x,       t.col_x.y,       t.col_x.z,       0.0,
                        t.col_y.x,       t.col_y.y,       t.col_y.z,       0.0,
@@ -155,8 +189,9 @@ private:
         return static_cast<int>(model_.nodes.size() - 1);
     }
 
-    /// One EXT_mesh_gpu_instancing node for `poses` (instances of `mesh`, in order).
-    int add_instanced_node(MeshId mesh, const std::vector<GltfInstancePose>& poses) {
+    /// One EXT_mesh_gpu_instancing node for `poses` (instances of glTF mesh `mesh`, in
+    /// order).
+    int add_instanced_node(int mesh, const std::vector<GltfInstancePose>& poses) {
         std::vector<float> translations, rotations, scales;
         for (const GltfInstancePose& pose : poses) {
             translations.insert(translations.end(), pose.translation.begin(),
@@ -176,7 +211,7 @@ private:
         tinygltf::Value::Object extension;
         extension["attributes"] = tinygltf::Value(std::move(attributes));
         tinygltf::Node node;
-        node.mesh = static_cast<int>(mesh);
+        node.mesh = mesh;
         node.extensions[kGltfGpuInstancing] = tinygltf::Value(std::move(extension));
         model_.nodes.push_back(std::move(node));
         return static_cast<int>(model_.nodes.size() - 1);
@@ -185,25 +220,37 @@ private:
     void add_nodes() {
         tinygltf::Scene gltf_scene;
         const std::vector<Instance>& instances = scene_.instances;
+        // A hidden element: a zero scale.
+        const GltfInstancePose hidden_pose{.scale = {0.0f, 0.0f, 0.0f}};
         std::size_t i = 0;
         while (i < instances.size()) {
-            // The longest run from i of one mesh with T * R * S transforms.
+            // The longest run from i of one mesh with T * R * S transforms; hidden instances
+            // join any run.
             std::vector<GltfInstancePose> poses;
-            std::size_t end = i;
+            int run_mesh = -1;  // the glTF mesh of the run's shown instances, -1 before one
             if (settings_.gpu_instancing) {
-                while (end < instances.size() && instances[end].mesh_id == instances[i].mesh_id) {
+                for (std::size_t end = i; end < instances.size(); ++end) {
+                    const Instance& instance = instances[end];
+                    if (is_hidden(instance)) {
+                        poses.push_back(hidden_pose);
+                        continue;
+                    }
+                    if (run_mesh >= 0 && gltf_mesh_of(instance) != run_mesh) break;
                     const std::optional<GltfInstancePose> pose =
-                        decompose_instance_transform(instances[end].object_to_world);
+                        decompose_instance_transform(instance.object_to_world);
                     if (!pose) break;
+                    run_mesh = gltf_mesh_of(instance);
                     poses.push_back(*pose);
-                    ++end;
                 }
             }
             if (poses.size() >= 2) {
-                gltf_scene.nodes.push_back(add_instanced_node(instances[i].mesh_id, poses));
-                i = end;
+                const int mesh = run_mesh >= 0 ? run_mesh : gltf_mesh_of(instances[i]);
+                gltf_scene.nodes.push_back(add_instanced_node(mesh, poses));
+                i += poses.size();
             } else {
-                gltf_scene.nodes.push_back(add_matrix_node(instances[i]));
+                const Instance& instance = instances[i];
+                gltf_scene.nodes.push_back(is_hidden(instance) ? add_hidden_node(instance)
+                                                               : add_matrix_node(instance));
                 ++i;
             }
         }
@@ -245,6 +292,7 @@ private:
     std::string path_;
     GltfWriteSettings settings_;
     tinygltf::Model model_;
+    std::vector<int> gltf_mesh_ids_;  ///< per Mesh, its glTF mesh; -1 for one without triangles
 };
 
 }  // namespace

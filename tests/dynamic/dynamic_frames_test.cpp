@@ -4,6 +4,8 @@
 #include <sys/wait.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -172,6 +174,88 @@ TEST(DynamicFrames, RigidlyMovingGltfInstancesMatchEmbreeFlat) {
     expect_matches_embree_flat(dynamic.scene(), {&accel.accel(), &instanced}, 5);
 }
 
+/// Writes a glTF file of two triangles side by side (one animation of two channels): instance 0
+/// shrinks to scale 0 and grows back (scale 1, 0, 0, 1 at 0, 1, 2 and 3 s: hidden from 1 to 2 s),
+/// instance 1 turns about y, so that something always shows.
+std::string write_hiding_object_file(const std::string& name) {
+    test::GltfTestFile file;
+    const int mesh = test::add_triangle_mesh(file);
+    file.add_node({{"mesh", mesh}});
+    file.add_node({{"mesh", mesh}, {"translation", {2, 0, 0}}});
+    file.add_scene({0, 1});
+    test::add_channel_animation(file, 0, "scale", {0, 1, 2, 3},
+                                {1, 1, 1, 0, 0, 0, 0, 0, 0, 1, 1, 1}, "VEC3");
+    test::add_channel_animation(file, 1, "rotation", {0, 3},
+                                {0, 0, 0, 1, 0, std::sin(0.5f), 0, std::cos(0.5f)}, "VEC4");
+    // One animation driving both nodes (the animator plays animation 0).
+    nlohmann::json& animations = file.json["animations"];
+    nlohmann::json channel = animations[1]["channels"][0];
+    channel["sampler"] = 1;
+    animations[0]["samplers"].push_back(animations[1]["samplers"][0]);
+    animations[0]["channels"].push_back(channel);
+    animations.erase(1);
+    return file.write_glb(name);
+}
+
+TEST(DynamicFrames, InstancesHiddenAndShownAgainMatchEmbreeFlat) {
+    const auto object = load_gltf_animated_object(write_hiding_object_file("hiding_object.glb"));
+    // The hiding instance deforms a mesh of its own (collapsed while hidden): the layout of
+    // the posed scene never changes.
+    EXPECT_EQ(object->rest_scene().meshes.size(), 2u);
+    EXPECT_EQ(object->deformed_meshes(), (std::vector<MeshId>{1}));
+    EXPECT_EQ(object->moving_instances(), (std::vector<InstanceId>{0, 1}));
+    // Copy 0 plays at t, copy 1 at t + 1.5 s (looped into the 3 s): frames at 0.5, 1.5,
+    // 2.5 and 3.5 s hide copy 1, then copy 0, then copy 1 again twice.
+    const std::vector<float> times = {0.5f, 1.5f, 2.5f, 3.5f};
+    auto hidden_copies = [](const DynamicScene& dynamic) {
+        std::string hidden;  // per copy: 1 when its hiding instance is collapsed
+        for (MeshId m : dynamic.dynamic_meshes()) {
+            const std::vector<Vec3f>& positions = dynamic.scene().meshes[m].positions;
+            hidden += std::all_of(positions.begin(), positions.end(),
+                                  [&](const Vec3f& p) { return p == positions.front(); })
+                          ? '1'
+                          : '0';
+        }
+        return hidden;
+    };
+    std::vector<std::string> hidden_per_frame;
+    for (DynamicTop top :
+         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
+        for (UpdateStrategy strategy : kUpdateStrategies) {
+            SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
+                         std::string(update_strategy_name(strategy)));
+            DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});
+            DynamicSceneAccelSettings settings;
+            settings.top = top;
+            settings.update.strategy = strategy;
+            DynamicSceneAccel accel(dynamic, settings);
+            hidden_per_frame.clear();
+            for (float time : times) {
+                SCOPED_TRACE("time " + std::to_string(time));
+                dynamic.pose(time);
+                accel.update();
+                hidden_per_frame.push_back(hidden_copies(dynamic));
+                expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 7);
+                test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "frame");
+            }
+        }
+    // Each copy is hidden and then shown again (or the other way round).
+    EXPECT_EQ(hidden_per_frame, (std::vector<std::string>{"01", "10", "01", "01"}));
+    for (glue::EmbreeDynamicMode mode :
+         {glue::EmbreeDynamicMode::flat, glue::EmbreeDynamicMode::flat_refit,
+          glue::EmbreeDynamicMode::instanced}) {
+        SCOPED_TRACE(std::string(glue::embree_dynamic_mode_name(mode)));
+        DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});
+        glue::EmbreeDynamicAccel accel(dynamic, mode);
+        for (float time : times) {
+            SCOPED_TRACE("time " + std::to_string(time));
+            dynamic.pose(time);
+            accel.update();
+            expect_matches_embree_flat(dynamic.scene(), {&accel}, 8);
+        }
+    }
+}
+
 std::uint64_t structure_hash_after_frames(UpdateStrategy strategy, DynamicTop top,
                                           int thread_count) {
     const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
@@ -305,6 +389,51 @@ TEST(TraceCommand, TimeTracesTheSceneAsAnimatedAtThatTime) {
     // The pose matters: at time 0 the joint has not turned, so some answer differs.
     EXPECT_NE(trace_with_cli(scene_path, rays_path, "0", dir + "/trace_time_hits_0.txt"),
               expected_lines);
+}
+
+TEST(TraceCommand, TimeWhereAScaleIsZeroTracesTheInstanceHidden) {
+    const std::string scene_path = write_hiding_object_file("trace_time_hiding.glb");
+    const GltfLoadResult loaded = load_gltf_scene_with_report(scene_path, {.keep_model = true});
+    const GltfAnimator animator(loaded);
+    Scene shown = loaded.scene;
+    animator.apply(0.5f, shown);
+    const std::vector<Ray> rays = rays_at_triangles(shown);  // rays 0 and 1 onto instance 0
+    const std::string dir = REBRAID_TEST_TMP;
+    const std::string rays_path = dir + "/trace_time_hiding_rays.txt";
+    {
+        std::ofstream out(rays_path);
+        write_rays(out, rays);
+    }
+    // Instance 0 is hidden at 1.5 s (scale 0), shown at 0.5 s; every structure agrees.
+    for (const float time : {0.5f, 1.5f}) {
+        Scene posed = loaded.scene;
+        animator.apply(time, posed);
+        const glue::EmbreeFlatAccel reference(posed);
+        std::vector<Hit> expected(rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i) expected[i] = reference.intersect(rays[i]);
+        EXPECT_EQ(expected[0].is_hit() && expected[0].instance_id == 0, time < 1.0f);
+        for (const char* accel :
+             {"flat", "twolevel", "rebraid", "embree-flat", "embree-instanced"}) {
+            SCOPED_TRACE(std::string(accel) + " at " + std::to_string(time) + " s");
+            const std::string out_path = dir + "/trace_time_hiding_" + accel + ".txt";
+            const std::vector<std::string> lines = trace_with_cli(
+                scene_path, rays_path, std::to_string(time) + " --accel " + accel, out_path);
+            ASSERT_EQ(lines.size(), rays.size());
+            // Each line: t instID primID, or "inf -1 -1" for a miss.
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                std::istringstream line(lines[i]);
+                std::string t;
+                long long instance = 0, prim = 0;
+                line >> t >> instance >> prim;
+                const Hit& e = expected[i];
+                EXPECT_EQ(instance, e.is_hit() ? (long long)e.instance_id : -1) << "ray " << i;
+                EXPECT_EQ(prim, e.is_hit() ? (long long)e.prim_id : -1) << "ray " << i;
+                if (e.is_hit()) {
+                    EXPECT_NEAR(std::stof(t), e.t, 1e-5f * e.t) << "ray " << i;
+                }
+            }
+        }
+    }
 }
 
 std::string read_bytes(const std::string& path) {

@@ -11,6 +11,8 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "embree_glue/reference/embree_reference.h"
@@ -18,8 +20,10 @@
 #include "rebraid/io/gltf_animation.h"
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/io/gltf_writer.h"
+#include "support/gltf_animation_files.h"
 #include "support/gltf_test_files.h"
 #include "support/hit_comparison.h"
+#include "support/own_structures.h"
 #include "support/test_rays.h"
 
 namespace rebraid {
@@ -315,6 +319,373 @@ TEST(GltfHiddenInstances, HiddenInstancesStayHiddenWhenAnimated) {
         EXPECT_EQ(scene.instances[0].mesh_id, loaded.report.hidden_mesh);
         expect_near(scene.instances[1].object_to_world.translation, {0, 0, 8 * time});
     }
+}
+
+/// Moves the channels of every animation of `file` into animation 0, so that they play
+/// together (the animator plays animation 0 by default).
+void merge_animations(GltfTestFile& file) {
+    nlohmann::json& animations = file.json["animations"];
+    for (std::size_t a = 1; a < animations.size(); ++a) {
+        const std::size_t offset = animations[0]["samplers"].size();
+        for (const nlohmann::json& sampler : animations[a]["samplers"])
+            animations[0]["samplers"].push_back(sampler);
+        for (nlohmann::json channel : animations[a]["channels"]) {
+            channel["sampler"] = channel["sampler"].get<std::size_t>() + offset;
+            animations[0]["channels"].push_back(channel);
+        }
+    }
+    animations = nlohmann::json::array({animations[0]});
+}
+
+/// A file whose instances an animated scale hides and shows (node 0 has the triangle):
+/// instance 0 (node 0, at z = 5) shrinks from scale 1 at 0 s to 0 at 1 s and stays hidden;
+/// instances 1 and 2 (two EXT_mesh_gpu_instancing elements, at (0,0,0) and (0,2,0), of node
+/// 2 below node 1 at (3,0,0)) follow node 1's scale 1 -> 0 -> 1 over 0, 1.5 and 3 s;
+/// instance 3 (node 3, at (-3,0,0)) never moves.
+GltfTestFile hiding_animation_file() {
+    GltfTestFile file = triangle_file();
+    const int elements = add_values<float>(file, {0, 0, 0, 0, 2, 0}, test::kFloat, 2, "VEC3");
+    file.add_node({{"mesh", 0}, {"translation", {0, 0, 5}}});
+    file.add_node({{"translation", {3, 0, 0}}, {"children", {2}}});
+    file.add_node({{"mesh", 0}, {"extensions", instancing({{"TRANSLATION", elements}})}});
+    file.add_node({{"mesh", 0}, {"translation", {-3, 0, 0}}});
+    file.add_scene({0, 1, 3});
+    test::add_channel_animation(file, 0, "scale", {0, 1}, {1, 1, 1, 0, 0, 0}, "VEC3");
+    test::add_channel_animation(file, 1, "scale", {0, 1.5f, 3}, {1, 1, 1, 0, 0, 0, 1, 1, 1},
+                                "VEC3");
+    merge_animations(file);
+    return file;
+}
+
+/// Rays straight down onto each of hiding_animation_file()'s instances, as placed at `time`
+/// (`scale_1`: node 1's scale then), well inside its triangle while it is shown.
+std::vector<Ray> rays_onto_hiding_instances(float scale_1) {
+    const float offset = 0.02f;
+    return {{{offset, offset, 10}, 0, {0, 0, -1}},
+            {{3 + offset, offset, 10}, 0, {0, 0, -1}},
+            {{3 + offset, 2 * scale_1 + offset, 10}, 0, {0, 0, -1}},
+            {{-3 + 0.1f, 0.1f, 10}, 0, {0, 0, -1}}};
+}
+
+/// Every structure over `scene` (flat, twolevel, rebraid, Embree's instanced) answers varied
+/// rays as Embree flat does, never hits an instance in `hidden`, and answers `aimed[i]` with
+/// instance i unless i is hidden (then with a miss).
+void expect_hidden_instances_never_hit(const Scene& scene, const std::vector<InstanceId>& hidden,
+                                       const std::vector<Ray>& aimed) {
+    const glue::EmbreeFlatAccel reference(scene);
+    std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 3000, 11);
+    // Rays down and up through a grid over every place an instance can be: the small
+    // triangles get hit often.
+    for (int x = 0; x < 32; ++x)
+        for (int y = 0; y < 16; ++y) {
+            const Vec3f org{-3.5f + 0.25f * float(x) + 0.01f, -0.5f + 0.25f * float(y) + 0.01f, 10};
+            rays.push_back({org, 0, {0, 0, -1}});
+            rays.push_back({{org.x, org.y, -5}, 0, {0, 0, 1}});
+        }
+    rays.insert(rays.end(), aimed.begin(), aimed.end());
+    const test::AccelAnswers expected = test::trace_all(reference, rays);
+    test::NamedAccels structures = test::own_structures(scene, 4.0f);
+    structures.emplace_back("embree-instanced",
+                            std::make_unique<glue::EmbreeInstancedAccel>(scene));
+    structures.emplace_back("embree-flat", std::make_unique<glue::EmbreeFlatAccel>(scene));
+    for (const auto& [name, accel] : structures) {
+        SCOPED_TRACE(name);
+        const test::AccelAnswers answers = test::trace_all(*accel, rays);
+        test::Tolerance tolerance = test::tolerance_for(scene.bounds());
+        tolerance.min_hit_fraction = 0.005;  // a few small triangles in the grid
+        test::expect_same_answers(scene, rays, expected, answers, tolerance);
+        for (const Hit& hit : answers.hits)
+            EXPECT_FALSE(hit.is_hit() &&
+                         std::count(hidden.begin(), hidden.end(), hit.instance_id) > 0)
+                << "hidden instance " << hit.instance_id << " was hit";
+        const std::size_t first_aimed = rays.size() - aimed.size();
+        for (InstanceId i = 0; i < aimed.size(); ++i) {
+            const Hit& hit = answers.hits[first_aimed + i];
+            if (std::count(hidden.begin(), hidden.end(), i) > 0) {
+                EXPECT_FALSE(hit.is_hit()) << "ray onto hidden instance " << i;
+            } else {
+                EXPECT_TRUE(hit.is_hit() && hit.instance_id == i) << "ray onto instance " << i;
+            }
+        }
+    }
+}
+
+TEST(GltfHiddenInstances, ScaleAnimatedToZeroHidesTheInstanceInThosePosesOnly) {
+    const GltfLoadResult loaded =
+        test::load_animated(hiding_animation_file().write_glb("hiding_animation.glb"));
+    ASSERT_EQ(loaded.scene.instances.size(), 4u);
+    EXPECT_TRUE(loaded.report.hidden_instances.empty());
+    const GltfAnimator animator(loaded);
+    EXPECT_EQ(animator.hideable_instances(), (std::vector<InstanceId>{0, 1, 2}));
+    // No hidden mesh in the file: the prepared layout appends one.
+    ASSERT_EQ(animator.hidden_mesh(), 1u);
+    ASSERT_EQ(animator.mesh_count(), 2u);
+    struct Pose {
+        float time;
+        float scale_1;  // node 1's scale
+        std::vector<InstanceId> hidden;
+    };
+    // Shown, then 0 hidden, then 0, 1 and 2 hidden, then 1 and 2 shown again.
+    const std::vector<Pose> poses = {
+        {0.5f, 2 / 3.0f, {}}, {1.0f, 1 / 3.0f, {0}}, {1.5f, 0, {0, 1, 2}}, {2.5f, 2 / 3.0f, {0}}};
+    Scene scene = loaded.scene;  // posed again and again, as a frame loop does
+    for (const Pose& pose : poses) {
+        SCOPED_TRACE("time " + std::to_string(pose.time));
+        animator.apply(pose.time, scene);
+        ASSERT_NO_THROW(scene.validate());
+        ASSERT_EQ(scene.instances.size(), 4u);
+        ASSERT_EQ(scene.meshes.size(), 2u);
+        EXPECT_TRUE(scene.meshes[1].triangles.empty());
+        for (InstanceId i = 0; i < 4; ++i) {
+            const bool is_hidden = std::count(pose.hidden.begin(), pose.hidden.end(), i) > 0;
+            EXPECT_EQ(scene.instances[i].mesh_id, is_hidden ? 1u : 0u) << "instance " << i;
+            if (is_hidden) {
+                EXPECT_TRUE(scene.instances[i].object_to_world == AffineTransform::identity());
+            }
+        }
+        expect_hidden_instances_never_hit(scene, pose.hidden,
+                                          rays_onto_hiding_instances(pose.scale_1));
+        // The same pose from a freshly loaded scene.
+        Scene fresh = loaded.scene;
+        animator.apply(pose.time, fresh);
+        for (InstanceId i = 0; i < 4; ++i) {
+            EXPECT_EQ(fresh.instances[i].mesh_id, scene.instances[i].mesh_id);
+            EXPECT_TRUE(fresh.instances[i].object_to_world == scene.instances[i].object_to_world);
+        }
+    }
+}
+
+TEST(GltfHiddenInstances, ScaleCrossingZeroHidesOnlyAtTheCrossing) {
+    // x scale 1 -> -1 over 2 s: shown, hidden at 1 s (scale 0), then shown mirrored. A
+    // second instance stands still beside it.
+    GltfTestFile file = triangle_file();
+    file.add_node({{"mesh", 0}});
+    file.add_node({{"mesh", 0}, {"translation", {3, 0, 0}}});
+    file.add_scene({0, 1});
+    test::add_channel_animation(file, 0, "scale", {0, 2}, {1, 1, 1, -1, 1, 1}, "VEC3");
+    const GltfLoadResult loaded = test::load_animated(file.write_glb("hiding_crossing.glb"));
+    const GltfAnimator animator(loaded);
+    EXPECT_EQ(animator.hideable_instances(), (std::vector<InstanceId>{0}));
+    const Ray shown{{0.1f, 0.1f, 10}, 0, {0, 0, -1}};
+    const Ray mirrored{{-0.1f, 0.1f, 10}, 0, {0, 0, -1}};
+    Scene scene = loaded.scene;
+    for (float time : {0.5f, 1.0f, 1.5f}) {
+        SCOPED_TRACE("time " + std::to_string(time));
+        animator.apply(time, scene);
+        ASSERT_NO_THROW(scene.validate());
+        const bool is_hidden = time == 1.0f;
+        EXPECT_EQ(scene.instances[0].mesh_id, is_hidden ? animator.hidden_mesh() : 0u);
+        expect_hidden_instances_never_hit(
+            scene, is_hidden ? std::vector<InstanceId>{0} : std::vector<InstanceId>{},
+            {time < 1.0f ? shown : mirrored});
+    }
+}
+
+TEST(GltfHiddenInstances, OnlyScalesThatMayReachZeroMakeAnInstanceHideable) {
+    struct Case {
+        const char* name;
+        std::vector<float> times, values;  // x scale keys (y, z stay 1); values with tangents
+        const char* interpolation;
+        bool is_hideable;
+    };
+    const std::vector<Case> cases = {
+        {"growing", {0, 1}, {1, 2}, "LINEAR", false},
+        {"step to zero", {0, 1}, {1, 0}, "STEP", true},
+        {"tiny", {0, 1}, {1, 1e-31f}, "LINEAR", true},
+        // CUBICSPLINE keys (in-tangent, value, out-tangent): positive values; a steep
+        // tangent dips the curve below zero between them, a gentle one does not.
+        {"gentle spline", {0, 1}, {0, 1, 0.5f, 0, 1, 0}, "CUBICSPLINE", false},
+        {"steep spline", {0, 1}, {0, 1, -20, 0, 1, 0}, "CUBICSPLINE", true},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        GltfTestFile file = triangle_file();
+        file.add_node({{"mesh", 0}});
+        file.add_node({{"mesh", 0}, {"translation", {5, 0, 0}}});
+        file.add_scene({0, 1});
+        std::vector<float> values;
+        for (float x : c.values) values.insert(values.end(), {x, 1, 1});
+        test::add_channel_animation(file, 0, "scale", c.times, values, "VEC3", c.interpolation);
+        const GltfLoadResult loaded = test::load_animated(file.write_glb("hideable.glb"));
+        const GltfAnimator animator(loaded);
+        EXPECT_EQ(animator.hideable_instances().size(), c.is_hideable ? 1u : 0u);
+        // An animation that cannot hide anything keeps the loader's layout.
+        EXPECT_EQ(animator.mesh_count(), c.is_hideable ? 2u : 1u);
+        EXPECT_EQ(animator.hidden_mesh(), c.is_hideable ? 1u : kNoHiddenMesh);
+        // Sampled densely, a singular pose happens only to a hideable instance.
+        Scene scene = loaded.scene;
+        for (int step = 0; step <= 200; ++step) {
+            ASSERT_NO_THROW(animator.apply(float(step) / 200, scene));
+            ASSERT_NO_THROW(scene.validate());
+        }
+    }
+}
+
+TEST(GltfHiddenInstances, CollapsedHiddenPosesKeepTheLayout) {
+    const GltfLoadResult loaded =
+        test::load_animated(hiding_animation_file().write_glb("hiding_collapsed.glb"));
+    const GltfAnimator animator(loaded, {.hidden_pose = GltfHiddenPose::collapsed_mesh});
+    EXPECT_EQ(animator.hideable_instances(), (std::vector<InstanceId>{0, 1, 2}));
+    // Each hideable instance deforms a mesh of its own; instance 3 keeps the loaded mesh.
+    EXPECT_EQ(animator.mesh_ids(), (std::vector<MeshId>{1, 2, 3, 0}));
+    EXPECT_EQ(animator.deformed_meshes(), (std::vector<MeshId>{1, 2, 3}));
+    EXPECT_EQ(animator.hidden_mesh(), kNoHiddenMesh);
+    Scene scene = loaded.scene;
+    for (const float time : {0.5f, 1.5f, 2.5f, 0.5f}) {
+        SCOPED_TRACE("time " + std::to_string(time));
+        animator.apply(time, scene);
+        ASSERT_NO_THROW(scene.validate());
+        ASSERT_EQ(scene.meshes.size(), 4u);
+        const float scale_1 = time == 1.5f ? 0.0f : 2 / 3.0f;
+        std::vector<InstanceId> hidden;
+        if (time > 1.0f) hidden.push_back(0);
+        if (time == 1.5f) hidden.insert(hidden.end(), {1, 2});
+        for (InstanceId i = 0; i < 4; ++i) {
+            EXPECT_EQ(scene.instances[i].mesh_id, animator.mesh_ids()[i]);
+            const std::vector<Vec3f>& positions = scene.meshes[animator.mesh_ids()[i]].positions;
+            const bool is_collapsed =
+                std::all_of(positions.begin(), positions.end(),
+                            [&](const Vec3f& p) { return p == positions.front(); });
+            EXPECT_EQ(is_collapsed, std::count(hidden.begin(), hidden.end(), i) > 0)
+                << "instance " << i;
+        }
+        expect_hidden_instances_never_hit(scene, hidden, rays_onto_hiding_instances(scale_1));
+    }
+}
+
+// ---- Writing hidden instances ------------------------------------------------------------------
+
+/// Loads `path` and checks it holds `original`'s instances in order: the same hidden ones (an
+/// identity instance of the hidden mesh), the others on the same mesh at (nearly, after a
+/// float T, R, S) the same transform; and that Embree answers rays on both alike.
+GltfLoadResult expect_round_trip(const GltfLoadResult& original, const std::string& path) {
+    const GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
+    const Scene& a = original.scene;
+    const Scene& b = loaded.scene;
+    EXPECT_EQ(loaded.report.hidden_instances, original.report.hidden_instances);
+    EXPECT_EQ(loaded.report.hidden_mesh, original.report.hidden_mesh);
+    EXPECT_EQ(b.meshes.size(), a.meshes.size());
+    EXPECT_TRUE(b.meshes.at(loaded.report.hidden_mesh).triangles.empty());
+    EXPECT_NO_THROW(b.validate());
+    if (b.instances.size() != a.instances.size()) {
+        ADD_FAILURE() << b.instances.size() << " instances, expected " << a.instances.size();
+        return loaded;
+    }
+    for (std::size_t i = 0; i < a.instances.size(); ++i) {
+        EXPECT_EQ(b.instances[i].mesh_id, a.instances[i].mesh_id) << "instance " << i;
+        const AffineTransform& ta = a.instances[i].object_to_world;
+        const AffineTransform& tb = b.instances[i].object_to_world;
+        expect_near(tb.col_x, ta.col_x, 1e-6f);
+        expect_near(tb.col_y, ta.col_y, 1e-6f);
+        expect_near(tb.col_z, ta.col_z, 1e-6f);
+        expect_near(tb.translation, ta.translation, 0);
+    }
+    const glue::EmbreeFlatAccel reference(a);
+    const std::vector<Ray> rays = test::varied_rays(reference, a.bounds(), 2000, 5);
+    test::expect_same_answers(a, rays, test::trace_all(reference, rays),
+                              test::trace_all(glue::EmbreeFlatAccel(b), rays),
+                              test::tolerance_for(a.bounds()));
+    return loaded;
+}
+
+/// Hidden instances 0, 2 and 4 (a zero node scale, a zero element SCALE, a zero y scale)
+/// around shown instances 1 and 3 of one mesh (mesh 1 is the loader's hidden mesh).
+GltfLoadResult load_hidden_instances_file() {
+    GltfTestFile file = triangle_file();
+    const int scale = add_values<float>(file, {1, 1, 1, 0, 0, 0, 2, 2, 2}, test::kFloat, 3, "VEC3");
+    file.add_node({{"mesh", 0}, {"scale", {0, 0, 0}}, {"translation", {0, 0, 5}}});
+    file.add_node({{"mesh", 0}, {"extensions", instancing({{"SCALE", scale}})}});
+    file.add_node({{"mesh", 0}, {"scale", {1, 0, 1}}, {"translation", {0, 0, 5}}});
+    file.add_scene({0, 1, 2});
+    return load_gltf_scene_with_report(file.write_glb("hidden_to_write.glb"));
+}
+
+TEST(GltfHiddenInstances, WrittenAsZeroScaleNodesTheyLoadBackHidden) {
+    const GltfLoadResult original = load_hidden_instances_file();
+    ASSERT_EQ(original.report.hidden_instances, (std::vector<std::uint32_t>{0, 2, 4}));
+    for (const char* name : {"hidden_nodes.glb", "hidden_nodes.gltf"}) {
+        SCOPED_TRACE(name);
+        const std::string path = test::scratch_path(name);
+        write_gltf_scene(original.scene, path);
+        const GltfLoadResult loaded = expect_round_trip(original, path);
+        // One node per instance; the hidden ones have a zero scale and the triangle mesh.
+        ASSERT_EQ(loaded.model->nodes.size(), 5u);
+        EXPECT_EQ(loaded.model->meshes.size(), 1u);
+        for (int n : {0, 2, 4}) {
+            EXPECT_EQ(loaded.model->nodes[n].scale, (std::vector<double>{0, 0, 0}));
+            EXPECT_EQ(loaded.model->nodes[n].mesh, 0);
+        }
+    }
+}
+
+TEST(GltfHiddenInstances, WrittenAsZeroScaleElementsTheyLoadBackHidden) {
+    const GltfLoadResult original = load_hidden_instances_file();
+    for (const char* name : {"hidden_elements.glb", "hidden_elements.gltf"}) {
+        SCOPED_TRACE(name);
+        const std::string path = test::scratch_path(name);
+        write_gltf_scene(original.scene, path, {.gpu_instancing = true});
+        const GltfLoadResult loaded = expect_round_trip(original, path);
+        // The hidden instances join the run of the shown ones: one node, five elements.
+        ASSERT_EQ(loaded.model->nodes.size(), 1u);
+        EXPECT_EQ(loaded.report.instance_gpu_elements, (std::vector<std::uint32_t>{0, 1, 2, 3, 4}));
+    }
+    // Instances of another mesh end a run (hidden instances join the run before); a run of
+    // one instance is a node of its own.
+    Scene scene = original.scene;
+    scene.meshes.insert(scene.meshes.begin() + 1, scene.meshes[0]);  // mesh 1: another triangle
+    scene.meshes[1].name = "second";
+    for (Instance& instance : scene.instances)
+        if (instance.mesh_id == 1) instance.mesh_id = 2;  // the hidden mesh, still last
+    scene.instances[3].mesh_id = 1;
+    scene.instances.pop_back();
+    const std::string path = test::scratch_path("hidden_two_meshes.glb");
+    write_gltf_scene(scene, path, {.gpu_instancing = true});
+    const GltfLoadResult loaded = load_gltf_scene_with_report(path, {.keep_model = true});
+    EXPECT_EQ(loaded.report.instance_gpu_elements,
+              (std::vector<std::uint32_t>{0, 1, 2, kNotGpuInstanced}));
+    EXPECT_EQ(loaded.report.hidden_instances, (std::vector<std::uint32_t>{0, 2}));
+    ASSERT_EQ(loaded.scene.instances.size(), scene.instances.size());
+    for (std::size_t i = 0; i < scene.instances.size(); ++i)
+        EXPECT_EQ(loaded.scene.instances[i].mesh_id, scene.instances[i].mesh_id) << i;
+}
+
+TEST(GltfHiddenInstances, WriterHidesSingularTransformsAndRefusesWhatCannotRoundTrip) {
+    Scene scene;
+    scene.meshes.push_back({"tri", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}});
+    scene.instances = {{0, AffineTransform::translate({0, 0, 1})},
+                       {0, AffineTransform::scale({1, 1, 0})},
+                       {0, AffineTransform::scale({1e-11f, 1e-11f, 1e-11f})},
+                       {0, AffineTransform::translate({2, 0, 0})}};
+    EXPECT_THROW(scene.validate(), Error);
+    EXPECT_NO_THROW(scene.validate(SingularTransforms::allowed));
+    for (bool gpu_instancing : {false, true}) {
+        SCOPED_TRACE(gpu_instancing ? "gpu instancing" : "nodes");
+        const std::string path = test::scratch_path("hidden_singular.glb");
+        write_gltf_scene(scene, path, {.gpu_instancing = gpu_instancing});
+        const GltfLoadResult loaded = load_gltf_scene_with_report(path);
+        EXPECT_EQ(loaded.report.hidden_instances, (std::vector<std::uint32_t>{1, 2}));
+        ASSERT_EQ(loaded.scene.instances.size(), 4u);
+        EXPECT_EQ(loaded.scene.instances[3].mesh_id, 0u);
+        EXPECT_EQ(loaded.scene.instances[2].mesh_id, loaded.report.hidden_mesh);
+    }
+    auto expect_write_error = [](const Scene& bad, const std::string& phrase) {
+        try {
+            write_gltf_scene(bad, test::scratch_path("bad_hidden.glb"));
+            ADD_FAILURE() << "no error (expected '" << phrase << "')";
+        } catch (const Error& error) {
+            EXPECT_NE(std::string(error.what()).find(phrase), std::string::npos) << error.what();
+        }
+    };
+    Scene only_hidden;
+    only_hidden.meshes.push_back({"hidden", {}, {}});
+    only_hidden.instances.push_back({0, AffineTransform::identity()});
+    expect_write_error(only_hidden, "no mesh has triangles");
+    Scene unused_empty = scene;
+    unused_empty.meshes.push_back({"unused", {}, {}});
+    expect_write_error(unused_empty, "mesh 1 ('unused') has no triangles and no instance");
+    Scene not_finite = scene;
+    not_finite.instances[1].object_to_world.col_x.x = std::numeric_limits<float>::infinity();
+    expect_write_error(not_finite, "instance 1 has a non-finite transform");
 }
 
 // ---- KHR_mesh_quantization positions ----------------------------------------------------------
