@@ -202,6 +202,7 @@ const std::vector<VariantKey>& variant_keys() {
         {"instance-entry-cost", real_number(&Settings::instance_entry_cost)},
         {"estimate-levels", whole_number(&Settings::estimate_levels, 8)},
         {"estimate-max-brefs", whole_number(&Settings::estimate_max_brefs, 1u << 30)},
+        {"estimate-give-up", whole_number(&Settings::estimate_give_up, 64)},
         {"overlap-threshold", real_number(&Settings::overlap_threshold)},
         {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
     };

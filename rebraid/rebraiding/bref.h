@@ -35,6 +35,9 @@ struct BRefSegment {
     std::uint32_t next_target = 0;
     /// False once the termination rules (§4.4) stopped opening for this subtree.
     bool can_open = true;
+    /// SAH estimates in a row, from this segment's ancestors down, that found opening would
+    /// not pay (RebraidSettings::estimate_give_up).
+    std::uint32_t failed_estimates = 0;
 
     std::uint32_t size() const { return end - start; }
     std::uint32_t free_space() const { return end_extra - end; }

@@ -42,10 +42,12 @@ std::pair<BRefSegment, BRefSegment> split_free_space(const BRefSegment& parent, 
     const std::uint32_t destination = std::max(parent.end, mid + left_space);
     std::copy(prims.begin() + mid, prims.begin() + mid + moved, prims.begin() + destination);
 
-    const BRefSegment left{parent.start, mid, mid + left_space, parent.next_target,
-                           parent.can_open};
-    const BRefSegment right{mid + left_space, parent.end + left_space, parent.end_extra,
-                            parent.next_target + left_space, parent.can_open};
+    const BRefSegment left{parent.start,     mid,
+                           mid + left_space, parent.next_target,
+                           parent.can_open,  parent.failed_estimates};
+    const BRefSegment right{mid + left_space, parent.end + left_space,
+                            parent.end_extra, parent.next_target + left_space,
+                            parent.can_open,  parent.failed_estimates};
     return {left, right};
 }
 

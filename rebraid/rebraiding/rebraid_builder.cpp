@@ -120,8 +120,14 @@ public:
                 compute_range_info(prims_.subspan(segment.start, mid - segment.start), threshold);
             right_info = compute_range_info(prims_.subspan(mid, segment.end - mid), threshold);
         }
-        BRefSegment left{segment.start, mid, mid, segment.next_target, segment.can_open};
-        BRefSegment right{mid, segment.end, segment.end, segment.next_target, segment.can_open};
+        BRefSegment left{segment.start,           mid, mid, segment.next_target, segment.can_open,
+                         segment.failed_estimates};
+        BRefSegment right{mid,
+                          segment.end,
+                          segment.end,
+                          segment.next_target,
+                          segment.can_open,
+                          segment.failed_estimates};
         std::optional<OpeningScan> left_scan, right_scan;
         if (segment.can_open && segment.free_space() > 0) {
             left_scan = scan_for_opening(prims_.subspan(segment.start, mid - segment.start),
@@ -160,11 +166,20 @@ private:
         if (settings_.opening_rule != OpeningRule::extent &&
             segment.size() > settings_.estimate_max_brefs)
             return 0;  // the segments below may still open
-        if (settings_.opening_rule != OpeningRule::extent &&
-            !estimate_opening(range(segment), info, targets_, criterion, source_,
-                              segment.free_space(), settings_)
-                 .lowers_sah())
-            return 0;  // the subtree below may still open: its segments are smaller
+        if (settings_.opening_rule != OpeningRule::extent) {
+            if (!estimate_opening(range(segment), info, targets_, criterion, source_,
+                                  segment.free_space(), settings_)
+                     .lowers_sah()) {
+                // The subtree below may still open (its segments are smaller), unless the
+                // estimates have said no often enough in a row.
+                ++segment.failed_estimates;
+                if (settings_.estimate_give_up > 0 &&
+                    segment.failed_estimates >= settings_.estimate_give_up)
+                    segment.can_open = false;
+                return 0;
+            }
+            segment.failed_estimates = 0;
+        }
         return open_brefs(segment, prims_, targets_, criterion, source_, threshold, &info);
     }
 

@@ -228,6 +228,29 @@ TEST(RebraidOpening, EstimateSizeLimitStopsOnlyLargerSegmentsFromOpening) {
     EXPECT_EQ(hash_of(build_with_limit(400)), hash_of(build_with_limit(1u << 30)));
 }
 
+TEST(RebraidOpening, GivingUpAfterFailedEstimatesOnlyPrunesWhereEstimatesSaidNo) {
+    const Scene scene = generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    auto build_giving_up_after = [&](std::uint32_t failures) {
+        return build_rebraid(scene, bvhs,
+                             {.opening_rule = OpeningRule::sah,
+                              .estimate_give_up = failures,
+                              .keep_cheaper_unopened = false});
+    };
+    auto hash_of = [&](RebraidBuild build) {
+        return *InstancedAccel(scene, bvhs, std::move(build.top), {}).stats().structure_hash;
+    };
+    const RebraidBuild never = build_giving_up_after(0);
+    ASSERT_GT(never.opened, 0u);
+    // Giving up at the first estimate that says no opens less, and still opens where the
+    // first estimates said yes.
+    const RebraidBuild at_once = build_giving_up_after(1);
+    EXPECT_LT(at_once.opened, never.opened);
+    EXPECT_GT(at_once.opened, 0u);
+    // More failures in a row than the tree is deep: the same tree as never giving up.
+    EXPECT_EQ(hash_of(build_giving_up_after(64)), hash_of(never));
+}
+
 /// The SAH: every structure over the same instances divides by the same scene box (docs/design.md,
 /// "SAH"), so it compares the expected work of rays through one fixed region.
 double absolute_cost(const Scene& scene, const std::vector<ObjectBvh>& bvhs, TopLevelBvh top) {
