@@ -1,11 +1,9 @@
 #pragma once
 
-#include <bit>
 #include <cstdint>
 
 #include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/triangle_group.h"
-#include "rebraid/core/accel.h"
 #include "rebraid/core/simd_config.h"
 
 namespace rebraid {
@@ -34,18 +32,6 @@ public:
             count_ += take;
             done += take;
         }
-    }
-    /// As LeafTriangleLanes::add_leaves_and_test.
-    template <class Test, class IsDone>
-    void add_leaves_and_test(const NodeRef* refs, unsigned slots, TraversalCounters* counters,
-                             Test&& test, IsDone&& is_done) {
-        do {
-            const NodeRef leaf = refs[std::countr_zero(slots)];
-            slots &= slots - 1;
-            if (counters) counters->triangles_tested += leaf.prim_count();
-            add(leaf, test);
-        } while (slots && !is_done());
-        test();
     }
     std::uint32_t count() const { return count_; }
     /// The 9 rows of the gathered triangles (lanes past count() hold arbitrary values).

@@ -39,21 +39,6 @@ public:
             lanes_[count_++] = first + i;
         }
     }
-    /// Adds the triangles of the leaves bit i of `slots` selects in `refs` (counting them in
-    /// `counters`, when given), calling `test()` whenever the lanes fill and once at the end
-    /// for the rest; stops adding leaves once `is_done()` (any-hit queries: a hit was found).
-    /// Both object-BVH queries visit sibling leaves this way (LeafVisits::with_siblings).
-    template <class Test, class IsDone>
-    void add_leaves_and_test(const NodeRef* refs, unsigned slots, TraversalCounters* counters,
-                             Test&& test, IsDone&& is_done) {
-        do {
-            const NodeRef leaf = refs[std::countr_zero(slots)];
-            slots &= slots - 1;
-            if (counters) counters->triangles_tested += leaf.prim_count();
-            add(leaf, test);
-        } while (slots && !is_done());
-        test();
-    }
     std::uint32_t count() const { return count_; }
     /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any.
     bool intersect(const TriangleGroupRay& ray, float tnear, float tfar,
@@ -76,6 +61,23 @@ private:
     const TriangleVerts* lanes_[kTriangleGroupSize];  // left uninitialised: filled as used
     std::uint32_t count_ = 0;
 };
+
+/// Adds the triangles of the leaves bit i of `slots` selects in `refs` to `lanes`
+/// (LeafTriangleLanes or LeafRowLanes), counting them in `counters` when given, calling
+/// `test()` whenever the lanes fill and once at the end for the rest; stops adding leaves
+/// once `is_done()` (any-hit queries: a hit was found). Both object-BVH queries visit sibling
+/// leaves this way (LeafVisits::with_siblings).
+template <class Lanes, class Test, class IsDone>
+void add_leaves_and_test(Lanes& lanes, const NodeRef* refs, unsigned slots,
+                         TraversalCounters* counters, Test&& test, IsDone&& is_done) {
+    do {
+        const NodeRef leaf = refs[std::countr_zero(slots)];
+        slots &= slots - 1;
+        if (counters) counters->triangles_tested += leaf.prim_count();
+        lanes.add(leaf, test);
+    } while (slots && !is_done());
+    test();
+}
 
 namespace object_traversal_detail {
 
@@ -102,7 +104,7 @@ bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pr
     };
     // Sibling leaves together (LeafVisits::with_siblings): their triangles share tests.
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
-        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [] { return false; });
+        add_leaves_and_test(lanes, refs, slots, counters, test_lanes, [] { return false; });
         return false;
     };
     traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(nodes, start, prepared,
@@ -122,7 +124,7 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
         lanes.clear();
     };
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
-        lanes.add_leaves_and_test(refs, slots, counters, test_lanes, [&] { return is_occluded; });
+        add_leaves_and_test(lanes, refs, slots, counters, test_lanes, [&] { return is_occluded; });
         return is_occluded;
     };
     // Any order: the first hit ends the query, and sorting the children costs more than the

@@ -265,14 +265,20 @@ TEST(GltfGpuInstancing, WriterRunsKeepOrderMirrorsAndShears) {
 
 // ---- Hidden (singular) instances --------------------------------------------------------------
 
-TEST(GltfHiddenInstances, ZeroScaleInstancesKeepTheirNumberAndAreNeverHit) {
+/// Hidden instances 0, 2 and 4 (a zero node scale, a zero element SCALE, a zero y scale)
+/// around shown instances 1 and 3 of one mesh (mesh 1 is the loader's hidden mesh).
+GltfLoadResult load_hidden_instances_file() {
     GltfTestFile file = triangle_file();
     const int scale = add_values<float>(file, {1, 1, 1, 0, 0, 0, 2, 2, 2}, test::kFloat, 3, "VEC3");
     file.add_node({{"mesh", 0}, {"scale", {0, 0, 0}}, {"translation", {0, 0, 5}}});
     file.add_node({{"mesh", 0}, {"extensions", instancing({{"SCALE", scale}})}});
     file.add_node({{"mesh", 0}, {"scale", {1, 0, 1}}, {"translation", {0, 0, 5}}});
     file.add_scene({0, 1, 2});
-    const GltfLoadResult loaded = load_gltf_scene_with_report(file.write_glb("hidden.glb"));
+    return load_gltf_scene_with_report(file.write_glb("hidden.glb"));
+}
+
+TEST(GltfHiddenInstances, ZeroScaleInstancesKeepTheirNumberAndAreNeverHit) {
+    const GltfLoadResult loaded = load_hidden_instances_file();
     const Scene& scene = loaded.scene;
     ASSERT_EQ(scene.instances.size(), 5u);
     EXPECT_EQ(loaded.report.hidden_instances, (std::vector<std::uint32_t>{0, 2, 4}));
@@ -586,18 +592,6 @@ GltfLoadResult expect_round_trip(const GltfLoadResult& original, const std::stri
                               test::trace_all(glue::EmbreeFlatAccel(b), rays),
                               test::tolerance_for(a.bounds()));
     return loaded;
-}
-
-/// Hidden instances 0, 2 and 4 (a zero node scale, a zero element SCALE, a zero y scale)
-/// around shown instances 1 and 3 of one mesh (mesh 1 is the loader's hidden mesh).
-GltfLoadResult load_hidden_instances_file() {
-    GltfTestFile file = triangle_file();
-    const int scale = add_values<float>(file, {1, 1, 1, 0, 0, 0, 2, 2, 2}, test::kFloat, 3, "VEC3");
-    file.add_node({{"mesh", 0}, {"scale", {0, 0, 0}}, {"translation", {0, 0, 5}}});
-    file.add_node({{"mesh", 0}, {"extensions", instancing({{"SCALE", scale}})}});
-    file.add_node({{"mesh", 0}, {"scale", {1, 0, 1}}, {"translation", {0, 0, 5}}});
-    file.add_scene({0, 1, 2});
-    return load_gltf_scene_with_report(file.write_glb("hidden_to_write.glb"));
 }
 
 TEST(GltfHiddenInstances, WrittenAsZeroScaleNodesTheyLoadBackHidden) {
