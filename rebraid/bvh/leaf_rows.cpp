@@ -3,6 +3,7 @@
 #include <string>
 
 #include "rebraid/core/error.h"
+#include "rebraid/core/huge_pages.h"
 
 namespace rebraid {
 
@@ -40,7 +41,11 @@ std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef ro
                                   const std::vector<TriangleVerts>& triangles) {
     // Zeros in the padding and in positions no leaf covers: loads past a leaf read finite
     // values into lanes that are masked off.
-    std::vector<float> rows(9 * triangles.size() + 2 * kLeafRowPadding, 0.0f);
+    // On huge pages when large, as the corners are: rays in random order touch rows all
+    // over the array, and with 4 KB pages nearly every access would also miss the TLB.
+    std::vector<float> rows;
+    reserve_on_huge_pages(rows, 9 * triangles.size() + 2 * kLeafRowPadding);
+    rows.resize(9 * triangles.size() + 2 * kLeafRowPadding, 0.0f);
     rewrite_leaf_rows(nodes, root, triangles, rows);
     return rows;
 }
