@@ -39,6 +39,28 @@ namespace {
 constexpr int kFrameCount = 4;
 constexpr float kTimeStep = 0.37f;  // not a divisor of the period: every frame differs
 
+constexpr DynamicTop kDynamicTops[] = {DynamicTop::two_level, DynamicTop::rebraid,
+                                       DynamicTop::rebraid_incremental};
+
+/// Settings of a DynamicSceneAccel with this top and update method, the rest default.
+DynamicSceneAccelSettings settings_for(DynamicTop top, UpdateStrategy strategy) {
+    DynamicSceneAccelSettings settings;
+    settings.top = top;
+    settings.update.strategy = strategy;
+    return settings;
+}
+
+/// Calls body(top, strategy) for every top and update method, each traced by name.
+template <class Body>
+void for_each_top_and_strategy(Body&& body) {
+    for (const DynamicTop top : kDynamicTops)
+        for (const UpdateStrategy strategy : kUpdateStrategies) {
+            SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
+                         std::string(update_strategy_name(strategy)));
+            body(top, strategy);
+        }
+}
+
 std::unique_ptr<AnimatedObject> small_twisting_object() {
     return make_twisting_object({.path_segment_count = 96, .tube_segment_count = 8});
 }
@@ -102,22 +124,15 @@ void expect_matches_embree_flat(const Scene& scene, std::initializer_list<const 
 
 TEST(DynamicFrames, EveryStrategyAndTopMatchEmbreeFlatOnTheDeformedFrame) {
     const auto object = small_twisting_object();
-    for (DynamicTop top :
-         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
-        for (UpdateStrategy strategy : kUpdateStrategies) {
-            SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
-                         std::string(update_strategy_name(strategy)));
-            DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
-            DynamicSceneAccelSettings settings;
-            settings.top = top;
-            settings.update.strategy = strategy;
-            DynamicSceneAccel accel(dynamic, settings);
-            run_frames(dynamic, accel, kFrameCount);
-            expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 3);
-            // Refit, rotated or rebuilt object trees under a rebuilt top: every box still
-            // holds the deformed triangles below it.
-            test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "after frames");
-        }
+    for_each_top_and_strategy([&](DynamicTop top, UpdateStrategy strategy) {
+        DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
+        DynamicSceneAccel accel(dynamic, settings_for(top, strategy));
+        run_frames(dynamic, accel, kFrameCount);
+        expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 3);
+        // Refit, rotated or rebuilt object trees under a rebuilt top: every box still
+        // holds the deformed triangles below it.
+        test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "after frames");
+    });
 }
 
 TEST(DynamicFrames, StaticMeshesFromAnotherBuilderMatchEmbreeFlat) {
@@ -127,9 +142,7 @@ TEST(DynamicFrames, StaticMeshesFromAnotherBuilderMatchEmbreeFlat) {
     for (DynamicTop top : {DynamicTop::rebraid, DynamicTop::rebraid_incremental}) {
         SCOPED_TRACE(std::string(dynamic_top_name(top)));
         DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});
-        DynamicSceneAccelSettings settings;
-        settings.top = top;
-        settings.update.strategy = UpdateStrategy::refit;
+        DynamicSceneAccelSettings settings = settings_for(top, UpdateStrategy::refit);
         settings.static_builder = glue::embree_object_bvh_builder();
         DynamicSceneAccel accel(dynamic, settings);
         run_frames(dynamic, accel, kFrameCount);
@@ -219,26 +232,19 @@ TEST(DynamicFrames, InstancesHiddenAndShownAgainMatchEmbreeFlat) {
         return hidden;
     };
     std::vector<std::string> hidden_per_frame;
-    for (DynamicTop top :
-         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
-        for (UpdateStrategy strategy : kUpdateStrategies) {
-            SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
-                         std::string(update_strategy_name(strategy)));
-            DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});
-            DynamicSceneAccelSettings settings;
-            settings.top = top;
-            settings.update.strategy = strategy;
-            DynamicSceneAccel accel(dynamic, settings);
-            hidden_per_frame.clear();
-            for (float time : times) {
-                SCOPED_TRACE("time " + std::to_string(time));
-                dynamic.pose(time);
-                accel.update();
-                hidden_per_frame.push_back(hidden_copies(dynamic));
-                expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 7);
-                test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "frame");
-            }
+    for_each_top_and_strategy([&](DynamicTop top, UpdateStrategy strategy) {
+        DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 2});
+        DynamicSceneAccel accel(dynamic, settings_for(top, strategy));
+        hidden_per_frame.clear();
+        for (float time : times) {
+            SCOPED_TRACE("time " + std::to_string(time));
+            dynamic.pose(time);
+            accel.update();
+            hidden_per_frame.push_back(hidden_copies(dynamic));
+            expect_matches_embree_flat(dynamic.scene(), {&accel.accel()}, 7);
+            test::expect_boxes_enclose_geometry(dynamic.scene(), accel.accel(), "frame");
         }
+    });
     // Each copy is hidden and then shown again (or the other way round).
     EXPECT_EQ(hidden_per_frame, (std::vector<std::string>{"01", "10", "01", "01"}));
     for (glue::EmbreeDynamicMode mode :
@@ -262,36 +268,25 @@ std::uint64_t structure_hash_after_frames(UpdateStrategy strategy, DynamicTop to
                                     static_cast<std::size_t>(thread_count));
     const auto object = small_twisting_object();
     DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
-    DynamicSceneAccelSettings settings;
-    settings.top = top;
-    settings.update.strategy = strategy;
-    DynamicSceneAccel accel(dynamic, settings);
+    DynamicSceneAccel accel(dynamic, settings_for(top, strategy));
     run_frames(dynamic, accel, kFrameCount);
     return accel.accel().stats().structure_hash.value_or(0);
 }
 
 TEST(DynamicFrames, SameStructureOnOneAndTwoThreadsAfterFramesOfEveryStrategy) {
-    for (DynamicTop top :
-         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental})
-        for (UpdateStrategy strategy : kUpdateStrategies) {
-            SCOPED_TRACE(std::string(dynamic_top_name(top)) + "+" +
-                         std::string(update_strategy_name(strategy)));
-            const std::uint64_t one = structure_hash_after_frames(strategy, top, 1);
-            EXPECT_NE(one, 0u);
-            EXPECT_EQ(one, structure_hash_after_frames(strategy, top, 2));
-        }
+    for_each_top_and_strategy([&](DynamicTop top, UpdateStrategy strategy) {
+        const std::uint64_t one = structure_hash_after_frames(strategy, top, 1);
+        EXPECT_NE(one, 0u);
+        EXPECT_EQ(one, structure_hash_after_frames(strategy, top, 2));
+    });
 }
 
 TEST(DynamicFrames, RememberedSahEqualsAFullRecomputationAfterFrames) {
     const auto object = small_twisting_object();
-    for (DynamicTop top :
-         {DynamicTop::two_level, DynamicTop::rebraid, DynamicTop::rebraid_incremental}) {
+    for (const DynamicTop top : kDynamicTops) {
         SCOPED_TRACE(std::string(dynamic_top_name(top)));
         DynamicScene dynamic(small_static_scene(), *object, {.copy_count = 3});
-        DynamicSceneAccelSettings settings;
-        settings.top = top;
-        settings.update.strategy = UpdateStrategy::refit;
-        DynamicSceneAccel accel(dynamic, settings);
+        DynamicSceneAccel accel(dynamic, settings_for(top, UpdateStrategy::refit));
         for (int frame = 1; frame <= kFrameCount; ++frame) {
             dynamic.pose(static_cast<float>(frame) * kTimeStep);
             const DynamicFrameReport report = accel.update();

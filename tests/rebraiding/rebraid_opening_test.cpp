@@ -99,6 +99,17 @@ double sah_of(const Scene& scene, const std::vector<ObjectBvh>& bvhs, TopLevelBv
     return *accel.stats().sah;
 }
 
+std::uint64_t structure_hash_of(const Scene& scene, const std::vector<ObjectBvh>& bvhs,
+                                TopLevelBvh top) {
+    const InstancedAccel accel(scene, bvhs, std::move(top), {});
+    return *accel.stats().structure_hash;
+}
+
+/// 80 small objects crossing each other in world space: a scene where the SAH rule opens.
+Scene make_crossing_crown_scene() {
+    return generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
+}
+
 /// A grid of separated upright instances: no box overlaps another.
 Scene make_separated_grid_scene() {
     Scene scene;
@@ -160,9 +171,8 @@ TEST(RebraidOpening, SameStructureOnOneTwoAndEightThreads) {
             // A small threshold makes the parallel opening, binning and estimate paths run.
             variant.settings.build.parallel_threshold = 64;
             test::expect_same_hash_on_threads({1, 2, 8}, [&] {
-                const InstancedAccel accel(
-                    named.scene, bvhs, build_rebraid(named.scene, bvhs, variant.settings).top, {});
-                return *accel.stats().structure_hash;
+                return structure_hash_of(named.scene, bvhs,
+                                         build_rebraid(named.scene, bvhs, variant.settings).top);
             });
         }
         EXPECT_EQ(checked, 3u) << "a variant this test names is gone: update the names";
@@ -187,8 +197,7 @@ TEST(RebraidOpening, SahRuleOpensWhereObjectsOverlap) {
     // Objects in world space crossing each other (the paper's Crown, and the cruiser's parts):
     // there opening pays, and the SAH rule must find it.
     std::vector<test::NamedScene> scenes;
-    scenes.push_back(
-        {"crown", generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7})});
+    scenes.push_back({"crown", make_crossing_crown_scene()});
     scenes.push_back({"cg57_cruiser",
                       load_gltf_scene(std::string(REBRAID_SHARED_SCENES) + "/cg57_cruiser.glb")});
     for (const test::NamedScene& named : scenes) {
@@ -205,7 +214,7 @@ TEST(RebraidOpening, SahRuleOpensWhereObjectsOverlap) {
 
 TEST(RebraidOpening, EstimateSizeLimitStopsOnlyLargerSegmentsFromOpening) {
     // Crossing objects in world space, where the SAH rule opens (test above).
-    const Scene scene = generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
+    const Scene scene = make_crossing_crown_scene();
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
     auto build_with_limit = [&](std::uint32_t limit) {
         // Without the cost guard, which could hide what the rule opened.
@@ -215,7 +224,7 @@ TEST(RebraidOpening, EstimateSizeLimitStopsOnlyLargerSegmentsFromOpening) {
                               .keep_cheaper_unopened = false});
     };
     auto hash_of = [&](RebraidBuild build) {
-        return *InstancedAccel(scene, bvhs, std::move(build.top), {}).stats().structure_hash;
+        return structure_hash_of(scene, bvhs, std::move(build.top));
     };
     // No segment may estimate: nothing opens, whatever the candidates.
     const RebraidBuild none = build_with_limit(0);
@@ -229,7 +238,7 @@ TEST(RebraidOpening, EstimateSizeLimitStopsOnlyLargerSegmentsFromOpening) {
 }
 
 TEST(RebraidOpening, GivingUpAfterFailedEstimatesOnlyPrunesWhereEstimatesSaidNo) {
-    const Scene scene = generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
+    const Scene scene = make_crossing_crown_scene();
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
     auto build_giving_up_after = [&](std::uint32_t failures) {
         return build_rebraid(scene, bvhs,
@@ -238,7 +247,7 @@ TEST(RebraidOpening, GivingUpAfterFailedEstimatesOnlyPrunesWhereEstimatesSaidNo)
                               .keep_cheaper_unopened = false});
     };
     auto hash_of = [&](RebraidBuild build) {
-        return *InstancedAccel(scene, bvhs, std::move(build.top), {}).stats().structure_hash;
+        return structure_hash_of(scene, bvhs, std::move(build.top));
     };
     const RebraidBuild never = build_giving_up_after(0);
     ASSERT_GT(never.opened, 0u);
@@ -313,11 +322,10 @@ TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
 TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
     // The crown's small objects pack into each other: from one extra BRef per instance, each
     // doubling of the budget opens more overlap and lowers the cost, several times over.
-    const Scene scene = generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
+    const Scene scene = make_crossing_crown_scene();
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
     const auto hash_of = [&](const RebraidBuild& build) {
-        const InstancedAccel accel(scene, bvhs, RebraidBuild(build).top, {});
-        return *accel.stats().structure_hash;
+        return structure_hash_of(scene, bvhs, RebraidBuild(build).top);
     };
     const auto cost_of = [&](const RebraidBuild& build) {
         return absolute_cost(scene, bvhs, RebraidBuild(build).top);
