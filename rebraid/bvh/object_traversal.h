@@ -49,7 +49,6 @@ public:
     bool occluded(const TriangleGroupRay& ray, float tnear, float tfar) const {
         return occluded_triangle_lanes(lanes_, count_, ray, tnear, tfar);
     }
-    const TriangleVerts* const* lanes() const { return lanes_; }
     /// Leaf-order position of the triangle in `lane`.
     std::uint32_t position(std::uint32_t lane) const {
         return std::uint32_t(lanes_[lane] - triangles_);
