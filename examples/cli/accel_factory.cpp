@@ -203,6 +203,9 @@ const std::vector<VariantKey>& variant_keys() {
         {"estimate-levels", whole_number(&Settings::estimate_levels, 8)},
         {"estimate-max-brefs", whole_number(&Settings::estimate_max_brefs, 1u << 30)},
         {"estimate-give-up", whole_number(&Settings::estimate_give_up, 64)},
+        {"require-overlap",
+         named_choice(&Settings::require_overlap,
+                      {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"overlap-threshold", real_number(&Settings::overlap_threshold)},
         {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
     };

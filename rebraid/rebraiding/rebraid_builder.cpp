@@ -25,6 +25,7 @@
 #include "rebraid/rebraiding/bref.h"
 #include "rebraid/rebraiding/bref_budget.h"
 #include "rebraid/rebraiding/bref_opening.h"
+#include "rebraid/rebraiding/cross_instance_overlap.h"
 #include "rebraid/rebraiding/overlap_opening.h"
 #include "rebraid/rebraiding/rebraid_cost_guard.h"
 #include "rebraid/rebraiding/rebraid_termination.h"
@@ -166,6 +167,11 @@ private:
         if (settings_.opening_rule != OpeningRule::extent &&
             segment.size() > settings_.estimate_max_brefs)
             return 0;  // the segments below may still open
+        if (settings_.opening_rule != OpeningRule::extent && settings_.require_overlap &&
+            !has_cross_instance_overlap(range(segment), targets_)) {
+            segment.can_open = false;  // nor can any segment below: cross_instance_overlap.h
+            return 0;
+        }
         if (settings_.opening_rule != OpeningRule::extent) {
             if (!estimate_opening(range(segment), info, targets_, criterion, source_,
                                   segment.free_space(), settings_)

@@ -107,6 +107,13 @@ struct RebraidSettings {
     /// no and the estimates were most of the build. 4 kept every measured scene's SAH within
     /// 0.3 % of never stopping; 3 and fewer cost fzk_haus over 1 % (docs/design.md).
     std::uint32_t estimate_give_up = 4;
+    /// OpeningRule::sah and overlap: before estimating, a segment checks that boxes of two
+    /// of its instances overlap (cross_instance_overlap.h); where none do, neither it nor any
+    /// segment below it opens, and no estimate is made there. Re-braiding undoes overlap
+    /// (paper §1, §4.2); where instances lie apart (a city of separate buildings) the
+    /// estimates were nearly all of the build and opened for SAH gains of a few tenths of a
+    /// percent (docs/design.md).
+    bool require_overlap = true;
     /// OpeningRule::sah and overlap: when the build opened anything, also build the top
     /// without opening and keep whichever has the lower exact SAH cost
     /// (rebraid_cost_guard.h), so the rules never end above the unopened top. Costs one

@@ -22,6 +22,7 @@
 #include "rebraid/generators/random_rays.h"
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/rebraiding/bref_budget.h"
+#include "rebraid/rebraiding/cross_instance_overlap.h"
 #include "rebraid/rebraiding/overlap_opening.h"
 #include "rebraid/rebraiding/rebraid_builder.h"
 #include "rebraid/top_level/two_level_builder.h"
@@ -483,6 +484,63 @@ TEST(OverlapOpening, SelectsOnlyBoxesSharedWithOtherInstances) {
     // A threshold above any share selects nothing.
     EXPECT_EQ(select_overlapping(prims, other_instances, bounds, 1.5f),
               (std::vector<std::uint8_t>{0, 0, 0}));
+}
+
+TEST(CrossInstanceOverlap, CountsOnlyBoxesOfTwoInstancesThatShareAnArea) {
+    auto box = [](Vec3f lo, Vec3f hi, std::uint32_t id) { return BuildPrim{{lo, hi}, id, 1}; };
+    const std::vector<BRefTarget> instances{{0, NodeRef::inner(0)},
+                                            {1, NodeRef::inner(0)},
+                                            {2, NodeRef::inner(0)},
+                                            {3, NodeRef::inner(0)}};
+    const std::vector<BRefTarget> one_instance{{0, NodeRef::inner(0)},
+                                               {0, NodeRef::inner(1)},
+                                               {0, NodeRef::inner(2)},
+                                               {0, NodeRef::inner(3)}};
+    const BuildPrim far = box({20, 0, 0}, {22, 2, 2}, 0);
+    const BuildPrim left = box({0, 0, 0}, {2, 2, 2}, 1);
+    const BuildPrim across = box({1, 1, 1}, {3, 3, 3}, 2);  // overlaps `left`
+    const BuildPrim face = box({2, 0, 0}, {4, 2, 2}, 2);    // shares `left`'s face x = 2
+    const BuildPrim edge = box({2, 2, 0}, {4, 4, 2}, 2);    // shares only an edge of it
+    const BuildPrim apart = box({10, 0, 0}, {12, 2, 2}, 3);
+    auto overlap = [&](std::vector<BuildPrim> prims, const std::vector<BRefTarget>& targets) {
+        const bool answer = has_cross_instance_overlap(prims, targets);
+        // Whichever box comes first (the first box has a quick test of its own).
+        std::reverse(prims.begin(), prims.end());
+        EXPECT_EQ(has_cross_instance_overlap(prims, targets), answer);
+        return answer;
+    };
+    EXPECT_TRUE(overlap({far, left, across, apart}, instances));
+    EXPECT_FALSE(overlap({far, left, across, apart}, one_instance));
+    EXPECT_TRUE(overlap({far, left, face, apart}, instances));
+    EXPECT_FALSE(overlap({far, left, edge, apart}, instances));
+    EXPECT_FALSE(overlap({far, left, apart}, instances));
+    // Flat boxes in one plane that share a region overlap; parallel planes do not.
+    const BuildPrim flat_a = box({0, 0, 5}, {2, 2, 5}, 1);
+    const BuildPrim flat_b = box({1, 1, 5}, {3, 3, 5}, 2);
+    const BuildPrim flat_c = box({1, 1, 6}, {3, 3, 6}, 2);
+    EXPECT_TRUE(overlap({far, flat_a, flat_b}, instances));
+    EXPECT_FALSE(overlap({far, flat_a, flat_c}, instances));
+    EXPECT_FALSE(overlap({left}, instances));
+}
+
+TEST(RebraidOpening, RequiringOverlapStopsOpeningOnlyWhereInstancesLieApart) {
+    // A city: separate buildings, where the SAH rule found small gains to open for.
+    const Scene city = generate_scene(SceneKind::kCity, {.instance_count = 400, .seed = 3});
+    const std::vector<ObjectBvh> city_bvhs = build_object_bvhs(city, own_object_bvh_builder());
+    auto build = [](const Scene& scene, const std::vector<ObjectBvh>& bvhs, bool require) {
+        return build_rebraid(scene, bvhs,
+                             {.opening_rule = OpeningRule::sah,
+                              .require_overlap = require,
+                              .keep_cheaper_unopened = false});
+    };
+    ASSERT_GT(build(city, city_bvhs, false).opened, 0u);
+    const RebraidBuild apart = build(city, city_bvhs, true);
+    EXPECT_EQ(apart.opened, 0u);
+    EXPECT_EQ(apart.brefs, city.instances.size());
+    // Objects crossing each other still open.
+    const Scene crown = make_crossing_crown_scene();
+    const std::vector<ObjectBvh> crown_bvhs = build_object_bvhs(crown, own_object_bvh_builder());
+    EXPECT_GT(build(crown, crown_bvhs, true).opened, 0u);
 }
 
 TEST(RebraidOpening, SettingsRejectOutOfRangeValues) {
