@@ -22,12 +22,20 @@ struct ObjectBvh {
     /// The same corners pre-arranged per leaf for the SIMD tests (leaf_rows.h); empty until
     /// made, and then kept in step with `triangles` by whatever changes them.
     std::vector<float> leaf_rows;
+    /// Triangles below each inner node (index = node id; object_subtree_counts.h): what a
+    /// re-braiding build reads to weigh the BRefs it opens, counted once per BVH rather than
+    /// once per top-level build. Empty until counted, and then kept in step with `nodes` by
+    /// whatever regroups them.
+    std::vector<std::uint32_t> node_prim_counts;
     double build_ms = 0.0;
 
     std::uint32_t prim_count() const { return std::uint32_t(prim_ids.size()); }
     /// Writes leaf_rows again from `triangles` and the current leaves, in place (when made):
     /// what an update that regroups leaves calls last.
     void refresh_leaf_rows();
+    /// Counts node_prim_counts again from the current nodes (when counted): what an update
+    /// that regroups nodes calls last.
+    void refresh_node_prim_counts();
     /// Bytes held by the arrays above.
     std::uint64_t memory_bytes() const;
 };

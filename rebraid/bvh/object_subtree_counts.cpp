@@ -86,6 +86,10 @@ LazySubtreeCounts::LazySubtreeCounts(std::span<const ObjectBvh> object_bvhs)
       computed_(std::make_unique<std::once_flag[]>(object_bvhs.size())) {}
 
 std::span<const std::uint32_t> LazySubtreeCounts::counts_of(std::uint32_t mesh) const {
+    const ObjectBvh& bvh = object_bvhs_[mesh];
+    // Counted at its build (and kept in step by the updates that regroup nodes).
+    if (!bvh.node_prim_counts.empty() && bvh.node_prim_counts.size() == bvh.nodes.size())
+        return bvh.node_prim_counts;
     std::call_once(computed_[mesh],
                    [&] { counts_[mesh] = subtree_prim_counts(object_bvhs_[mesh]); });
     return counts_[mesh];

@@ -28,9 +28,10 @@ std::vector<std::vector<std::uint32_t>> subtree_prim_counts(const Scene& scene,
 std::uint32_t object_ref_prim_count(const ObjectBvh& bvh, NodeRef ref,
                                     std::span<const std::uint32_t> node_prims);
 
-/// subtree_prim_counts of a set of object BVHs, each computed the first time it is asked for
-/// (thread-safe, once per mesh), so a re-braiding build counts only the meshes it actually
-/// opens BRefs of, and computes them afresh: never stale after a refit, rotation or rebuild.
+/// subtree_prim_counts of a set of object BVHs: the counts a BVH keeps
+/// (ObjectBvh::node_prim_counts, made by the builders and kept in step by the updates that
+/// regroup nodes), else computed the first time they are asked for (thread-safe, once per
+/// mesh), so a re-braiding build counts only the meshes it actually opens BRefs of.
 /// The BVHs must outlive this object and stay unchanged while it is used.
 class LazySubtreeCounts {
 public:

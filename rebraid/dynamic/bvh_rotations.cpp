@@ -522,6 +522,7 @@ RotationPassStats BvhRotator::refit_and_rotate(const Mesh& mesh, ObjectBvh& bvh,
     const double root_area = root.bounds.half_area();
     stats.sah = root_area > 0.0 ? root.cost / root_area : 0.0;
     bvh.refresh_leaf_rows();  // leaves may have been merged, split or reordered
+    bvh.refresh_node_prim_counts();
     return stats;
 }
 

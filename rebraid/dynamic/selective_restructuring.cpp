@@ -260,7 +260,10 @@ RestructureStats SelectiveRestructurer::restructure(const Mesh& mesh, ObjectBvh&
         stats.prims_rebuilt += info.prim_count;
     }
     stats.sah = (tree_cost + cost_change) / root_area;
-    if (stats.subtrees_rebuilt > 0) bvh.refresh_leaf_rows();  // rebuilt subtrees' leaves
+    if (stats.subtrees_rebuilt > 0) {  // rebuilt subtrees' leaves and nodes
+        bvh.refresh_leaf_rows();
+        bvh.refresh_node_prim_counts();
+    }
     return stats;
 }
 

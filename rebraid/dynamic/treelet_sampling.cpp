@@ -401,6 +401,7 @@ TreeletStats TreeletSampler::optimize(const Mesh& mesh, ObjectBvh& bvh,
         stats.nodes_rebuilt += treelet.inner_ids.size();
     }
     stats.sah = (tree_cost + cost_change) / root_area;
+    if (stats.applied > 0) bvh.refresh_node_prim_counts();  // treelets regroup the nodes
     return stats;
 }
 

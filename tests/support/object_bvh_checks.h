@@ -12,6 +12,7 @@
 
 #include "embree_glue/reference/embree_reference.h"
 #include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/object_subtree_counts.h"
 #include "rebraid/core/random.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/generators/mesh_generators.h"
@@ -126,6 +127,11 @@ inline void expect_valid(const Mesh& mesh, const ObjectBvh& bvh) {
             ADD_FAILURE() << "prim " << p << " reached " << reached[p] << " times";
     EXPECT_EQ(errors, 0u);
     EXPECT_EQ(bvh.bounds, mesh.bounds());
+    // The counts re-braiding weighs BRefs by are in step with the nodes.
+    if (!bvh.node_prim_counts.empty()) {
+        EXPECT_TRUE(bvh.node_prim_counts == subtree_prim_counts(bvh))
+            << "node triangle counts out of step with the nodes";
+    }
     // The pre-arranged rows the SIMD kernels read are in step with the corners and leaves.
     if (bvh.leaf_rows.empty()) return;  // BuildSettings::pre_arranged_leaves off
     EXPECT_TRUE(bvh.leaf_rows == make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles))
