@@ -105,6 +105,19 @@ SupportTable::SupportBounds SupportTable::support_bounds(Vec3f direction) const 
     return {scale * upper, best_vertex};
 }
 
+BBox3f SupportTable::table_world_bounds(const AffineTransform& to_world) const {
+    if (is_empty_) return BBox3f{};
+    BBox3f box;
+    for (int axis = 0; axis < 3; ++axis) {
+        const Vec3f row{to_world.col_x[axis], to_world.col_y[axis], to_world.col_z[axis]};
+        const float center = dot(row, center_) + to_world.translation[axis];
+        box.min[axis] = center - support_bounds(-row).upper;
+        box.max[axis] = center + support_bounds(row).upper;
+    }
+    // As world_bounds: the weights, the sums and the mapped centre round.
+    return widen_for_mapping_rounding(box, to_world, object_magnitude_, 32.0f);
+}
+
 BBox3f SupportTable::world_bounds(const AffineTransform& to_world, const ObjectBvh& bvh,
                                   NodeRef node, float tolerance) const {
     if (is_empty_) return BBox3f{};

@@ -44,6 +44,11 @@ public:
     /// vertex_world_bounds, mostly without searching `bvh`. Empty for an empty table.
     BBox3f world_bounds(const AffineTransform& to_world, const ObjectBvh& bvh, NodeRef node,
                         float tolerance = 0.01f) const;
+    /// A box holding the same vertices from the table alone, without searching: each face
+    /// at the table's upper bound, within the grid's error of the exact one (looser than
+    /// world_bounds near edges between far-apart extreme vertices, where world_bounds
+    /// searches). Empty for an empty table.
+    BBox3f table_world_bounds(const AffineTransform& to_world) const;
 
 private:
     static constexpr int kSide = kCells + 1;

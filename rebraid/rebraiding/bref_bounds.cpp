@@ -41,7 +41,7 @@ BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_
     if (node.is_leaf()) return transformed_leaf_bounds(bvh, node, to_world);
     if (rule == BRefBoundsRule::transformed_vertices) {
         if (const SupportTable* table = tables ? tables->find(node) : nullptr)
-            return intersection(table->world_bounds(to_world, bvh, node),
+            return intersection(table->table_world_bounds(to_world),
                                 to_world.transform_bbox_conservative(node_box));
         return vertex_world_bounds(bvh, node, node_box, to_world);
     }

@@ -29,7 +29,9 @@ enum class BRefBoundsRule {
 /// World-space bounds of the BRef to `node` of `bvh` placed by `to_world`; `node_box` is the
 /// node's object-space box (as its parent stores it, or the BVH's bounds for the root).
 /// Under transformed_vertices, a node with a table in `tables` takes its box from the table
-/// (as tight, mostly without searching the BVH, and never wider than transformed_box's).
+/// alone (SupportTable::table_world_bounds: no search of the BVH, each face within the
+/// grid's error of the vertices' box, a few percent of the extent at most, and never wider
+/// than transformed_box's).
 BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
                          const AffineTransform& to_world, BRefBoundsRule rule,
                          const ObjectSupportTables* tables = nullptr);

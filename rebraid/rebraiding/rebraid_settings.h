@@ -75,8 +75,9 @@ struct RebraidSettings {
     /// BRefBoundsRule::transformed_vertices: a mesh with at least this many instances in the
     /// build gets support tables (object_support_tables.h) for its root and the root's
     /// children, so that its BRefs' boxes cost a few table lookups rather than searches of
-    /// its BVH. A table costs about 80 such searches and is a little looser (the tables'
-    /// bound, against 1 % of the extent), so it pays for meshes of many instances.
+    /// its BVH. A table costs about 80 such searches and is a little looser (the grid's
+    /// error, up to about 3 % of the extent, against 1 %), so it pays for meshes of many
+    /// instances.
     std::uint32_t support_table_instances = 512;
     /// Which BRefs are opened (see OpeningRule).
     OpeningRule opening_rule = OpeningRule::sah;
