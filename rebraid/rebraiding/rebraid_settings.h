@@ -75,13 +75,10 @@ struct RebraidSettings {
     /// BRefBoundsRule::transformed_vertices: a mesh with at least this many instances in the
     /// build gets support tables (object_support_tables.h) for its root and the root's
     /// children, so that its BRefs' boxes cost a few table lookups rather than searches of
-    /// its BVH. A table costs about 80 such searches (a box is 6) and is a little looser
-    /// (the grid's error, up to about 3 % of the extent, against 1 %); an instance asks for
-    /// up to 9 boxes (its root and, as a candidate, the root's children), so tables pay from
-    /// about 8 instances. 8 against 512: the default scene's top build 34.1 M to 20.3 M
-    /// instructions and its SAH 44.29 to 44.21, two_cylinder_engine 4.63 M to 3.94 M, no
-    /// other measured scene changed by more than 0.1 % (docs/design.md).
-    std::uint32_t support_table_instances = 8;
+    /// its BVH. A table costs about 80 such searches and is a little looser (the grid's
+    /// error, up to about 3 % of the extent, against 1 %), so it pays for meshes of many
+    /// instances.
+    std::uint32_t support_table_instances = 512;
     /// Which BRefs are opened (see OpeningRule).
     OpeningRule opening_rule = OpeningRule::sah;
     /// Also open BRefs to object-BVH leaves of several triangles, into one BRef per triangle
