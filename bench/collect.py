@@ -18,6 +18,10 @@ Suites (every command runs from the repository root):
              (rebraid:opening=extent:bref-bounds=box)
   generated  the same for `rebraid generate KIND` (trees, crown, powerplant, city; the kinds'
              defaults), written to a temporary folder first
+  forests    `rebraid stats FILE --accel A --json` for twolevel and rebraid on
+             `rebraid generate trees --instances N` at 100,000 and 1,000,000 instances (255 M
+             and 2.55 G instanced triangles): build times, SAH, memory and peak RSS at scale
+             (--quick: 1,000 instances)
   animate    `rebraid animate --json`: the built-in twisting object in the default scene, and
              each animated shared scene (per ../shared/scenes/MANIFEST.md) as --dynamic in
              ../shared/scenes/cg57_cruiser.glb
@@ -39,7 +43,8 @@ Expected time on a 2-core machine (AMD EPYC, 24 GiB), from a --quick run (about 
 one full round of the default scene (15 s) and 2-frame animate runs, all while a compile job
 held about one core: one round takes about 1 min for `scenes`, 2 min for `generated` (mostly
 trees and powerplant) and 3 min for `animate` (20 frames of 640x360 primary and diffuse rays
-for 15 methods, 4 runs), so the full default collection (all suites, 5 rounds) takes about
+for 15 methods, 4 runs), 1.3 min for `forests` (mostly the re-braided build and the SAH
+walk over the million-instance forest), so the full default collection (all suites, 5 rounds) takes about
 30 minutes, and less on an idle machine. Run it on an otherwise idle
 machine: the builds and the rays use every core. The `instructions` suite counts rather than
 times, so any machine load leaves its results as they are (it only runs longer): one round
@@ -63,10 +68,12 @@ from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENE
                         commit_info, load_average, machine_info, relative_to_repo, repo_path,
                         run, run_json, scene_name)
 
-SUITES = ["structures", "scenes", "generated", "animate", "instructions"]
+SUITES = ["structures", "scenes", "generated", "forests", "animate", "instructions"]
 # The structures whose SAH and structure_hash the `structures` suite records.
 STRUCTURE_ACCELS = ["flat", "twolevel", "rebraid"]
 GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
+# The structures the `forests` suite builds over the large generated forests.
+FOREST_ACCELS = ["twolevel", "rebraid"]
 ANIMATE_STATIC = f"{SHARED_SCENES}/cg57_cruiser.glb"
 # Used when the MANIFEST cannot be read: the shared scenes it lists with an animation.
 ANIMATED_FALLBACK = ["brainstem", "motion_capture_rom", "animated_morph_cube"]
@@ -79,10 +86,12 @@ TMP = "TMP"
 # `instructions` counts 10,000 rays of each kind (valgrind is ~50x slower; --quick: the default
 # scene alone).
 FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": [],
-        "instruction_rays": 10000, "instruction_scenes": "all"}
+        "instruction_rays": 10000, "instruction_scenes": "all",
+        "forest_instances": [100000, 1000000]}
 QUICK = {"rays": 2000, "repetitions": 1, "frames": 2,
          "animate": ["--width", "64", "--height", "36"],
-         "instruction_rays": 200, "instruction_scenes": "default"}
+         "instruction_rays": 200, "instruction_scenes": "default",
+         "forest_instances": [1000]}
 COUNT_INSTRUCTIONS = "bench/tools/count_instructions.py"
 
 
@@ -156,6 +165,19 @@ def jobs_of(suite, settings, threads):
     if suite == "generated":
         return [(kind, bench_command(f"{TMP}/{kind}.glb", settings, threads),
                  [generate_command(kind, threads)]) for kind in GENERATED_KINDS]
+    if suite == "forests":
+        jobs = []
+        for count in settings["forest_instances"]:
+            forest = f"trees-{count}"
+            generate = [BINARY, "generate", "trees", "--instances", str(count),
+                        "-o", f"{TMP}/{forest}.glb"]
+            generate += ["--threads", str(threads)] if threads is not None else []
+            for index, accel in enumerate(FOREST_ACCELS):
+                argv = [BINARY, "stats", f"{TMP}/{forest}.glb", "--accel", accel, "--json"]
+                argv += ["--threads", str(threads)] if threads is not None else []
+                # One generation serves both structures.
+                jobs.append((f"{forest}-{accel}", argv, [generate] if index == 0 else []))
+        return jobs
     if suite == "instructions":
         def count(scene):
             return ["python3", COUNT_INSTRUCTIONS, scene, "--rays",

@@ -17,7 +17,8 @@ import sys
 
 from results_io import DEFAULT_ACCELS, PAPER, RESULTS_DIR, load_results, median, repo_path
 
-SUITE_ORDER = {"structures": 0, "scenes": 1, "generated": 2, "animate": 3, "instructions": 4}
+SUITE_ORDER = {"structures": 0, "scenes": 1, "generated": 2, "forests": 3, "animate": 4,
+               "instructions": 5}
 # Short column names of the structures; any other variant keeps its full name.
 LABELS = {PAPER: "paper"}
 PROJECT = ["flat", "twolevel", "rebraid", PAPER]
@@ -258,9 +259,10 @@ def animate_runs(runs):
     return [run for run in runs if rows_with(run, "method")]
 
 
-def structure_runs(runs):
-    return [run for run in runs
-            if isinstance(run.results[0]["output"], dict) and "structure_hash" in run.results[0]["output"]]
+def stats_runs(runs, suite):
+    """The runs of `suite` whose output is one `rebraid stats --json` object."""
+    return [run for run in runs if run.suite == suite and isinstance(run.results[0]["output"], dict)
+            and "structure_hash" in run.results[0]["output"]]
 
 
 def instruction_runs(runs):
@@ -419,6 +421,42 @@ def section_table1b(runs, accels):
     out.append("### Work (nodes + triangles) over flat's\n")
     out.append(table(["scene"] + [label(a) for a in project], rows))
     return "\n".join(out)
+
+
+def section_forests(runs):
+    """Table 2b: `rebraid stats` of twolevel and rebraid on the large generated forests, one
+    process per structure and round: medians over the rounds."""
+    forests = {}
+    for run in runs:
+        forest, accel = run.name.rsplit("-", 1)
+        values = {f: median([r["output"].get(f) for r in run.results])
+                  for f in ("build_ms", "top_build_ms", "sah", "memory_bytes", "peak_rss_bytes")}
+        values["instances"] = run.results[0]["output"].get("instances")
+        values["triangles"] = run.results[0]["output"].get("triangles")
+        forests.setdefault(forest, {})[accel] = values
+    header = ["forest", "instances", "instanced triangles", "twolevel build", "rebraid build",
+              "twolevel top", "rebraid top", "rebraid top / twolevel top", "twolevel SAH",
+              "rebraid SAH", "twolevel memory (MiB)", "rebraid memory (MiB)",
+              "twolevel peak RSS (MiB)", "rebraid peak RSS (MiB)"]
+    rows = []
+    for forest, by_accel in forests.items():
+        two, re = by_accel.get("twolevel", {}), by_accel.get("rebraid", {})
+        def mib(values, field):
+            return fmt(values[field] / 2**20, 1) if values.get(field) is not None else "-"
+        ratio = (re["top_build_ms"] / two["top_build_ms"]
+                 if re.get("top_build_ms") is not None and two.get("top_build_ms") else None)
+        rows.append([forest, fmt_int((two or re).get("instances")),
+                     fmt_int((two or re).get("triangles")),
+                     fmt_ms(two.get("build_ms")), fmt_ms(re.get("build_ms")),
+                     fmt_ms(two.get("top_build_ms")), fmt_ms(re.get("top_build_ms")),
+                     fmt_ratio(ratio), fmt(two.get("sah")), fmt(re.get("sah")),
+                     mib(two, "memory_bytes"), mib(re, "memory_bytes"),
+                     mib(two, "peak_rss_bytes"), mib(re, "peak_rss_bytes")])
+    return ("## Table 2b: top levels at scale (ms)\n\n"
+            "`rebraid stats` on `rebraid generate trees --instances N`, each structure in its own\n"
+            "process (so the ratio is of the medians): full build (object BVHs and top level), the\n"
+            "top level alone, SAH, the structure's memory and the process's peak resident memory\n"
+            "(scene, structure and the SAH walk).\n\n" + table(header, rows))
 
 
 def section_table2(runs, accels):
@@ -581,7 +619,8 @@ def report(results, generated_by, results_dir, plots_out=None):
     frame_runs = animate_runs(runs)
     accels = ordered_accels(scene_runs)
     links = draw_plots(plots_out, scene_runs, frame_runs) if plots_out else {}
-    structures = structure_runs(runs)
+    structures = stats_runs(runs, "structures")
+    forests = stats_runs(runs, "forests")
     instructions = section_instructions(instruction_runs(runs))
     parts = [
         "# Benchmark results\n",
@@ -600,6 +639,8 @@ def report(results, generated_by, results_dir, plots_out=None):
             parts.append(links["scenes"])
         parts += [section_table1b(scene_runs, accels), instructions,
                   section_table2(scene_runs, accels), section_memory(scene_runs, accels)]
+    if forests:
+        parts.append(section_forests(forests))
     else:
         parts.append(instructions)
     frames = section_frames(frame_runs)
