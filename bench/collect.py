@@ -43,8 +43,8 @@ Expected time on a 2-core machine (AMD EPYC, 24 GiB), from a --quick run (about 
 one full round of the default scene (15 s) and 2-frame animate runs, all while a compile job
 held about one core: one round takes about 1 min for `scenes`, 2 min for `generated` (mostly
 trees and powerplant) and 3 min for `animate` (20 frames of 640x360 primary and diffuse rays
-for 15 methods, 4 runs), 1.3 min for `forests` (mostly the re-braided build and the SAH
-walk over the million-instance forest), so the full default collection (all suites, 5 rounds) takes about
+for 15 methods, 4 runs), half a minute for `forests` on an idle machine (mostly the
+million-instance forest), so the full default collection (all suites, 5 rounds) takes about
 30 minutes, and less on an idle machine. Run it on an otherwise idle
 machine: the builds and the rays use every core. The `instructions` suite counts rather than
 times, so any machine load leaves its results as they are (it only runs longer): one round
