@@ -60,21 +60,24 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         ->capture_default_str()
         ->type_name("X");
     command
-        .add_option("--budget-factor", options.rebraid.budget_factor,
-                    "rebraid: extra BRefs per instance (paper 5.2; 0 = the plain two-level top)")
+        .add_option(
+            "--budget-factor", options.rebraid.budget_factor,
+            "rebraid: extra BRefs per instance (paper 5.2; 0 with --budget-rule instances = "
+            "the plain two-level top)")
         ->check(number_between(0, 1e6))
         ->capture_default_str()
         ->type_name("B");
     const std::map<std::string, BudgetRule> budget_rules{{"instances", BudgetRule::per_instance},
-                                                         {"primitives", BudgetRule::per_primitive}};
+                                                         {"primitives", BudgetRule::per_primitive},
+                                                         {"larger", BudgetRule::larger}};
     command
         .add_option("--budget-rule", options.rebraid.budget_rule,
                     "rebraid: size the BRef budget by instances (--budget-factor x instances, "
-                    "the paper's rule for instanced scenes) or primitives (instanced "
+                    "the paper's rule for instanced scenes), primitives (instanced "
                     "primitives / --primitives-per-bref, its rule for objects in world space; "
-                    "paper 5.2)")
+                    "paper 5.2) or the larger of the two")
         ->transform(named_value(budget_rules))
-        ->default_str("instances")
+        ->default_str("larger")
         ->type_name("RULE");
     command
         .add_option("--primitives-per-bref", options.rebraid.primitives_per_bref,

@@ -84,11 +84,12 @@ RebraidSettings whole_scene_budget(RebraidSettings settings, const Scene& scene,
         all_instances += instances;
         all_prims += prims;
     }
-    if (settings.budget_rule == BudgetRule::per_instance && static_instances_count > 0)
+    // Under BudgetRule::larger both scale, so whichever rule wins keeps its share.
+    if (settings.budget_rule != BudgetRule::per_primitive && static_instances_count > 0)
         settings.budget_factor =
             float(std::min(1e6, double(settings.budget_factor) * double(all_instances) /
                                     double(static_instances_count)));
-    if (settings.budget_rule == BudgetRule::per_primitive && static_prims > 0)
+    if (settings.budget_rule != BudgetRule::per_instance && static_prims > 0)
         settings.primitives_per_bref = float(std::max(
             1.0, double(settings.primitives_per_bref) * double(static_prims) / double(all_prims)));
     return settings;

@@ -7,15 +7,20 @@ namespace rebraid {
 
 std::uint64_t bref_budget(const RebraidSettings& settings, std::uint64_t instance_count,
                           std::uint64_t instanced_primitive_count) {
+    const auto per_instance =
+        std::uint64_t(std::floor(double(settings.budget_factor) * double(instance_count)));
+    const auto per_primitive =
+        std::uint64_t(double(instanced_primitive_count) / double(settings.primitives_per_bref));
     std::uint64_t budget = 0;
     switch (settings.budget_rule) {
         case BudgetRule::per_instance:
-            budget =
-                std::uint64_t(std::floor(double(settings.budget_factor) * double(instance_count)));
+            budget = per_instance;
             break;
         case BudgetRule::per_primitive:
-            budget = std::uint64_t(double(instanced_primitive_count) /
-                                   double(settings.primitives_per_bref));
+            budget = per_primitive;
+            break;
+        case BudgetRule::larger:
+            budget = std::max(per_instance, per_primitive);
             break;
     }
     const std::uint64_t openable =

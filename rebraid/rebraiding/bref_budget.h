@@ -10,7 +10,8 @@
 namespace rebraid {
 
 /// Extra BRef slots the build may fill by opening (paper §5.2), under the settings' rule:
-/// budget_factor x instances, or instanced primitives / primitives_per_bref. Capped twice, so
+/// budget_factor x instances, instanced primitives / primitives_per_bref, or the larger of
+/// the two. Capped twice, so
 /// the BRef array (allocated in full up front) stays bounded for any budget_factor:
 /// - at instanced primitives - instances: every leaf holds at least one primitive, so opening
 ///   every BRef down to the leaves cannot make more BRefs than primitives (with Embree's

@@ -351,10 +351,9 @@ TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSet
     RebraidSettings larger = settings;
     std::uint64_t last_budget = best.build.budget;
     for (std::uint32_t step = 0; step < settings.budget_doublings; ++step) {
-        if (larger.budget_rule == BudgetRule::per_instance)
-            larger.budget_factor *= 2.0f;
-        else
-            larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref * 0.5f);
+        // Both rules' budgets double, so `larger` doubles whichever of them it takes.
+        larger.budget_factor *= 2.0f;
+        larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref * 0.5f);
         TrackedBuild candidate = build_rebraid_once(inputs, larger, true);
         // The caps (every primitive a BRef, max_budget) stop the budget from growing.
         if (candidate.build.budget <= last_budget) break;

@@ -14,6 +14,11 @@ enum class BudgetRule {
     /// budget = instanced primitives / primitives_per_bref: the paper's rule for trees over
     /// objects built in world space.
     per_primitive,
+    /// The larger of the two: a few instances of large meshes (objects placed in world space,
+    /// as the paper's Powerplant) get the per-primitive budget, many small instances the
+    /// per-instance one. On the measured scenes only the generated powerplant differs from
+    /// per_instance (224 -> 3,179 extra BRefs; 1.8x the diffuse rays per second).
+    larger,
 };
 
 /// Which BRefs a segment opens (paper §4.2, and rules beyond the paper).
@@ -40,11 +45,12 @@ struct RebraidSettings {
     /// (within the budget); 1 or more opens nothing.
     float open_threshold = 0.10f;
     /// Which rule sizes the budget.
-    BudgetRule budget_rule = BudgetRule::per_instance;
-    /// Extra BRefs per instance under BudgetRule::per_instance (paper §5.2: 4). 0 gives the
-    /// plain two-level top.
+    BudgetRule budget_rule = BudgetRule::larger;
+    /// Extra BRefs per instance under BudgetRule::per_instance and larger (paper §5.2: 4). 0
+    /// with per_instance gives the plain two-level top.
     float budget_factor = 4.0f;
-    /// Instanced primitives per extra BRef under BudgetRule::per_primitive (paper: 1000).
+    /// Instanced primitives per extra BRef under BudgetRule::per_primitive and larger (paper
+    /// §5.2: 1000).
     float primitives_per_bref = 1000.0f;
     /// Budget search: after the build at the rule's budget, build
     /// again with the budget doubled, up to this many times, and keep the build of lowest

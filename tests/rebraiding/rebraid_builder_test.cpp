@@ -43,7 +43,10 @@ RebraidSettings paper_with(Change change) {
 std::vector<NamedSettings> settings_variants() {
     return {
         {"paper", RebraidSettings::paper_rules()},
-        {"no-budget", paper_with([](RebraidSettings& s) { s.budget_factor = 0.0f; })},
+        {"no-budget", paper_with([](RebraidSettings& s) {
+             s.budget_rule = BudgetRule::per_instance;
+             s.budget_factor = 0.0f;
+         })},
         {"open-everything", paper_with([](RebraidSettings& s) {
              s.open_threshold = 0.0f;
              s.budget_factor = 1000.0f;
@@ -62,7 +65,8 @@ std::vector<NamedSettings> settings_variants() {
              s.bounds_rule = BRefBoundsRule::transformed_children;
          })},
         {"default", {}},
-        {"default-tables", [] {
+        {"default-tables",
+         [] {
              RebraidSettings settings;
              settings.support_table_instances = 1;  // every mesh's BRefs from support tables
              return settings;
@@ -130,6 +134,7 @@ TEST(RebraidBuilder, NoBudgetGivesAPlainTwoLevelTop) {
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
     // The paper's rules, whose BRef boxes are the plain top's (transformed node boxes).
     RebraidSettings no_budget = RebraidSettings::paper_rules();
+    no_budget.budget_rule = BudgetRule::per_instance;
     no_budget.budget_factor = 0.0f;
     RebraidBuild rebraided = build_rebraid(scene, bvhs, no_budget);
     // Without budget nothing opens: one item per instance, at its object root.

@@ -284,6 +284,7 @@ TEST(RebraidOpening, SahRuleNeverAboveTwoLevelOnRotatedInstances) {
             if (variant.settings.opening_rule == OpeningRule::extent) continue;
             SCOPED_TRACE(variant.name);
             RebraidSettings unopened_settings = variant.settings;
+            unopened_settings.budget_rule = BudgetRule::per_instance;
             unopened_settings.budget_factor = 0.0f;
             const double unopened = absolute_cost(
                 named.scene, bvhs, build_rebraid(named.scene, bvhs, unopened_settings).top);

@@ -173,6 +173,10 @@ TEST(BRefBudget, IsCappedByPrimitivesAndMaxBudget) {
     const RebraidSettings per_primitive{.budget_rule = BudgetRule::per_primitive,
                                         .primitives_per_bref = 1.0f};
     EXPECT_EQ(bref_budget(per_primitive, 10, 100), 90u);
+    // The default takes the larger of 4 per instance and one per 1,000 primitives.
+    EXPECT_EQ(bref_budget({}, 10, 1'000'000), 1000u);
+    EXPECT_EQ(bref_budget({}, 1000, 1'000'000), 4000u);
+    EXPECT_EQ(bref_budget({.budget_factor = 0.0f}, 1000, 1'000'000), 1000u);
 }
 
 TEST(BRefBudget, MaxBudgetAboveTheItemLimitIsRejected) {
