@@ -209,6 +209,7 @@ const std::vector<VariantKey>& variant_keys() {
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"overlap-threshold", real_number(&Settings::overlap_threshold)},
         {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
+        {"budget-search-min-use", real_number(&Settings::budget_search_min_use)},
     };
     return keys;
 }

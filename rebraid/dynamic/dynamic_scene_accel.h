@@ -49,7 +49,10 @@ struct DynamicSceneAccelSettings {
     /// The plain top (top = two_level).
     BuildSettings two_level_top = default_top_level_settings();
     /// The re-braided top (top = rebraid; top = rebraid_incremental for both its parts).
-    RebraidSettings rebraid;
+    /// Without the budget search: its doublings are whole top builds, and here they would be
+    /// paid every frame (brainstem in cg57_cruiser, `rebraid animate`: two doublings took the
+    /// re-braided top from 4.4 to 18 ms per frame and saved 5 ms of rendering).
+    RebraidSettings rebraid{.budget_doublings = 0};
     /// The incremental top's cut (top = rebraid_incremental).
     IncrementalTopSettings incremental;
 };

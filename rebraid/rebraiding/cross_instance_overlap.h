@@ -13,9 +13,9 @@ namespace rebraid {
 ///
 /// Re-braiding exists to undo overlap between object BVHs (Benthin et al. 2017, §1, §4.2):
 /// a segment where no two instances' boxes overlap has none to undo, and nor has any segment
-/// below it, which holds a subset of its BRefs once it opens nothing. One sort along the segment's largest axis and a sweep that stops
-/// at the first overlap found; O(n log n) for boxes that overlap along that axis only in
-/// small groups.
+/// below it, which holds a subset of its BRefs once it opens nothing. One sort along the
+/// segment's largest axis and a sweep that stops at the first overlap found; O(n log n) for
+/// boxes that overlap along that axis only in small groups.
 bool has_cross_instance_overlap(std::span<const BuildPrim> prims,
                                 std::span<const BRefTarget> targets);
 

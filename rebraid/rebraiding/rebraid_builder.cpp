@@ -343,13 +343,20 @@ double top_level_own_cost(const TopLevelBvh& top) {
 
 /// The budget search (RebraidSettings::budget_doublings): `first` is the tracked build at the
 /// rule's budget; builds with the budget doubled follow while each lowers the exact cost by
-/// at least budget_search_min_gain, and the cheapest build is returned. The budgets tried and
+/// at least budget_search_min_gain and fills at least budget_search_min_use of its budget, and
+/// the cheapest build is returned. The budgets tried and
 /// the costs compared depend on the input only, so the choice is the same on any thread count.
 TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSettings& settings,
                                    TrackedBuild first) {
     TrackedBuild best = std::move(first);
     RebraidSettings larger = settings;
     std::uint64_t last_budget = best.build.budget;
+    const std::uint64_t seeds = inputs.seeded.size();
+    const auto fills_its_budget = [&](const RebraidBuild& build) {
+        return double(build.brefs - seeds) >=
+               double(settings.budget_search_min_use) * double(build.budget);
+    };
+    if (!fills_its_budget(best.build)) return best;
     for (std::uint32_t step = 0; step < settings.budget_doublings; ++step) {
         // Both rules' budgets double, so `larger` doubles whichever of them it takes.
         larger.budget_factor *= 2.0f;
@@ -364,7 +371,7 @@ TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSet
             best.cost - candidate.cost >=
             double(settings.budget_search_min_gain) * top_level_own_cost(best.build.top);
         if (candidate.cost < best.cost) best = std::move(candidate);
-        if (!is_worth_doubling_again) break;
+        if (!is_worth_doubling_again || !fills_its_budget(candidate.build)) break;
     }
     return best;
 }

@@ -38,6 +38,9 @@ void RebraidSettings::validate() const {
     check(std::isfinite(budget_search_min_gain) && budget_search_min_gain >= 0.0f &&
               budget_search_min_gain < 1.0f,
           "budget_search_min_gain", budget_search_min_gain, "must be finite and in [0, 1)");
+    check(std::isfinite(budget_search_min_use) && budget_search_min_use >= 0.0f &&
+              budget_search_min_use <= 1.0f,
+          "budget_search_min_use", budget_search_min_use, "must be finite and in [0, 1]");
     if (estimate_levels > 8)
         throw Error("re-braiding setting estimate_levels " + std::to_string(estimate_levels) +
                     " must be at most 8");

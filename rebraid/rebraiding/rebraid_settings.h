@@ -55,12 +55,21 @@ struct RebraidSettings {
     /// Budget search: after the build at the rule's budget, build
     /// again with the budget doubled, up to this many times, and keep the build of lowest
     /// exact SAH cost (rebraid_cost_guard.h); stop doubling once a doubling lowers the cost by
-    /// less than `budget_search_min_gain`. 0 (the default) builds once, at the rule's budget.
-    /// Each step costs one more top-level build of twice the items.
-    std::uint32_t budget_doublings = 0;
+    /// less than `budget_search_min_gain` or leaves its budget partly unused
+    /// (`budget_search_min_use`). 0 builds once, at the rule's budget. Each step costs one
+    /// more top-level build of twice the items. The paper notes that subtrees may run out of
+    /// budget where objects overlap deep down (§7); on the shared scenes where the rule's
+    /// budget was spent in full (brainstem, cg57_cruiser, powerplant) two doublings traced
+    /// 4-23 % faster for 2-9 ms more top build (bench/RESULTS.md).
+    std::uint32_t budget_doublings = 2;
     /// Least cost reduction for the budget search to double again, relative to the part of
     /// the SAH cost the top level itself makes (its nodes and the boxes entering objects).
     float budget_search_min_gain = 0.01f;
+    /// The budget search doubles only after a build that filled at least this fraction of its
+    /// budget: a build that left free space unused was not held back by its budget, and where
+    /// nothing opens (forests, cities) a doubling would only repeat the build. 0 doubles
+    /// whatever the use.
+    float budget_search_min_use = 0.95f;
     /// Hard cap on the extra BRefs, whatever the rule gives: the BRef array (40 bytes per
     /// BRef, plus as much again of build scratch) is allocated in full before the build
     /// starts, so a huge budget_factor must not turn into gigabytes. The default, 2^22 extra

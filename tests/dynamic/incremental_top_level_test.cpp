@@ -189,10 +189,15 @@ TEST(IncrementalTopLevel, StaticTopGetsTheBudgetOfTheWholeScene) {
     std::vector<InstanceId> static_ids, dynamic_ids;
     for (std::size_t i = 0; i < scene.instances.size(); ++i)
         (i % 4 == 0 ? dynamic_ids : static_ids).push_back(InstanceId(i));
-    const std::uint64_t full_budget = build_rebraid(scene, object_bvhs).budget;
-    const std::uint64_t dynamic_budget = build_rebraid(scene, object_bvhs, {}, dynamic_ids).budget;
+    // The rule's budget, without the search's doublings, which depend on what each build
+    // opens.
+    const RebraidSettings rule_budget{.budget_doublings = 0};
+    const std::uint64_t full_budget = build_rebraid(scene, object_bvhs, rule_budget).budget;
+    const std::uint64_t dynamic_budget =
+        build_rebraid(scene, object_bvhs, rule_budget, dynamic_ids).budget;
     for (bool whole_scene : {true, false}) {
-        IncrementalTopLevel incremental({}, {.static_budget_for_whole_scene = whole_scene});
+        IncrementalTopLevel incremental(rule_budget,
+                                        {.static_budget_for_whole_scene = whole_scene});
         incremental.build_static(scene, object_bvhs, static_ids);
         const std::uint64_t static_budget =
             incremental.build_frame(scene, object_bvhs, dynamic_ids).budget - dynamic_budget;

@@ -303,10 +303,11 @@ TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
     const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
     for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
         SCOPED_TRACE(int(rule));
-        const RebraidSettings base{.opening_rule = rule};
+        const RebraidSettings base{.budget_doublings = 0, .opening_rule = rule};
         RebraidSettings searching = base;
         searching.budget_doublings = 3;
         searching.budget_search_min_gain = 0.0f;  // try every doubling
+        searching.budget_search_min_use = 0.0f;
         const RebraidBuild searched = build_rebraid(scene, bvhs, searching);
         const double searched_sah = absolute_cost(scene, bvhs, searched.top);
         for (const float factor : {4.0f, 8.0f, 16.0f, 32.0f}) {
@@ -334,7 +335,10 @@ TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
     };
     for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
         SCOPED_TRACE(int(rule));
-        const RebraidSettings base{.budget_factor = 1.0f, .opening_rule = rule};
+        const RebraidSettings base{.budget_factor = 1.0f,
+                                   .budget_doublings = 0,
+                                   .budget_search_min_use = 0.0f,
+                                   .opening_rule = rule};
         const auto search = [&](std::uint32_t doublings, float min_gain) {
             RebraidSettings settings = base;
             settings.budget_doublings = doublings;
@@ -359,6 +363,36 @@ TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
         EXPECT_EQ(hash_of(stopped), hash_of(one_doubling));
         EXPECT_NE(hash_of(stopped), hash_of(unhindered));
     }
+}
+
+TEST(RebraidOpening, BudgetSearchDoublesOnlyABudgetSpentInFull) {
+    // The crossing crown at one extra BRef per instance, where the first doubling pays
+    // (BudgetSearchStopsWhenADoublingGainsTooLittle); the extent rule has no cost guard, so
+    // the build returned is the one the search judged.
+    const Scene scene = make_crossing_crown_scene();
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    const RebraidSettings once{
+        .budget_factor = 1.0f, .budget_doublings = 0, .opening_rule = OpeningRule::extent};
+    const RebraidBuild first = build_rebraid(scene, bvhs, once);
+    const double used = double(first.brefs - scene.instances.size()) / double(first.budget);
+    ASSERT_GT(used, 0.1);
+    const auto search_with_min_use = [&](double min_use) {
+        RebraidSettings settings = once;
+        settings.budget_doublings = 1;
+        settings.budget_search_min_gain = 0.0f;
+        settings.budget_search_min_use = float(min_use);
+        return build_rebraid(scene, bvhs, settings);
+    };
+    // Asked to have spent a little more than it did: the first build stands alone.
+    const RebraidBuild held = search_with_min_use(std::min(1.0, used + 0.01));
+    EXPECT_EQ(held.budget, first.budget);
+    EXPECT_EQ(structure_hash_of(scene, bvhs, RebraidBuild(held).top),
+              structure_hash_of(scene, bvhs, RebraidBuild(first).top));
+    // Asked for a little less: the doubled build is tried and, cheaper here, kept.
+    const RebraidBuild doubled = search_with_min_use(used - 0.01);
+    EXPECT_EQ(doubled.budget, 2 * first.budget);
+    EXPECT_THROW((RebraidSettings{.budget_search_min_use = 1.5f}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.budget_search_min_use = -0.1f}.validate()), Error);
 }
 
 TEST(RebraidOpening, LeafOpeningSplitsLeavesIntoTriangles) {
