@@ -38,6 +38,11 @@ def fmt_ms(value):
     return fmt_sig(value)
 
 
+def fmt_mib(num_bytes):
+    """Bytes as MiB, with about three significant digits."""
+    return DASH if num_bytes is None else fmt_sig(num_bytes / 2 ** 20)
+
+
 def fmt_sig(value):
     """A positive quantity with about three significant digits."""
     if value is None:
@@ -441,8 +446,6 @@ def section_forests(runs):
     rows = []
     for forest, by_accel in forests.items():
         two, re = by_accel.get("twolevel", {}), by_accel.get("rebraid", {})
-        def mib(values, field):
-            return fmt(values[field] / 2**20, 1) if values.get(field) is not None else "-"
         ratio = (re["top_build_ms"] / two["top_build_ms"]
                  if re.get("top_build_ms") is not None and two.get("top_build_ms") else None)
         rows.append([forest, fmt_int((two or re).get("instances")),
@@ -450,8 +453,8 @@ def section_forests(runs):
                      fmt_ms(two.get("build_ms")), fmt_ms(re.get("build_ms")),
                      fmt_ms(two.get("top_build_ms")), fmt_ms(re.get("top_build_ms")),
                      fmt_ratio(ratio), fmt(two.get("sah")), fmt(re.get("sah")),
-                     mib(two, "memory_bytes"), mib(re, "memory_bytes"),
-                     mib(two, "peak_rss_bytes"), mib(re, "peak_rss_bytes")])
+                     fmt_mib(two.get("memory_bytes")), fmt_mib(re.get("memory_bytes")),
+                     fmt_mib(two.get("peak_rss_bytes")), fmt_mib(re.get("peak_rss_bytes"))])
     return ("## Table 2b: top levels at scale (ms)\n\n"
             "`rebraid stats` on `rebraid generate trees --instances N`, each structure in its own\n"
             "process (so the ratio is of the medians): full build (object BVHs and top level), the\n"
@@ -494,8 +497,8 @@ def section_table2(runs, accels):
 def section_memory(runs, accels):
     if not any(run.value("accel", a, "memory_bytes") is not None for run in runs for a in accels):
         return ""
-    rows = [[run.name] + [fmt_sig(None if (v := run.value("accel", a, "memory_bytes")) is None
-                                  else v / 2 ** 20) for a in accels] for run in runs]
+    rows = [[run.name] + [fmt_mib(run.value("accel", a, "memory_bytes")) for a in accels]
+            for run in runs]
     return ("## Memory (MiB)\n\nBytes each structure holds, as it reports them (`memory_bytes`).\n\n"
             + table(["scene"] + [label(a) for a in accels], rows))
 

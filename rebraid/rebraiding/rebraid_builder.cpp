@@ -159,20 +159,20 @@ private:
                                RangeInfo& info) const {
         const std::size_t threshold = settings_.build.parallel_threshold;
         std::vector<std::uint8_t> overlapping;
-        if (settings_.opening_rule == OpeningRule::overlap) {
-            overlapping = select_overlapping(range(segment), targets_, info.bounds,
-                                             settings_.overlap_threshold);
-            criterion.selected = overlapping;
-        }
-        if (settings_.opening_rule != OpeningRule::extent &&
-            segment.size() > settings_.estimate_max_brefs)
-            return 0;  // the segments below may still open
-        if (settings_.opening_rule != OpeningRule::extent && settings_.require_overlap &&
-            !has_cross_instance_overlap(range(segment), targets_)) {
-            segment.can_open = false;  // nor can any segment below: cross_instance_overlap.h
-            return 0;
-        }
         if (settings_.opening_rule != OpeningRule::extent) {
+            // The cheap reasons not to estimate first, before any per-segment grid.
+            if (segment.size() > settings_.estimate_max_brefs)
+                return 0;  // the segments below may still open
+            if (settings_.require_overlap &&
+                !has_cross_instance_overlap(range(segment), targets_)) {
+                segment.can_open = false;  // nor can any segment below: cross_instance_overlap.h
+                return 0;
+            }
+            if (settings_.opening_rule == OpeningRule::overlap) {
+                overlapping = select_overlapping(range(segment), targets_, info.bounds,
+                                                 settings_.overlap_threshold);
+                criterion.selected = overlapping;
+            }
             if (!estimate_opening(range(segment), info, targets_, criterion, source_,
                                   segment.free_space(), settings_)
                      .lowers_sah()) {
