@@ -66,8 +66,10 @@ struct GltfAnimator::Data {
     std::vector<std::uint32_t> instance_nodes;  ///< glTF node per instance
     std::vector<bool> instance_is_skinned;
     std::vector<bool> instance_is_hideable;  ///< per instance: some pose may hide it
-    std::vector<MeshId> loaded_mesh_ids;     ///< Mesh per instance in the loader's layout
-    std::vector<MeshId> mesh_ids;            ///< Mesh per instance in the prepared layout
+    /// Mesh per instance in the loader's layout, except that an instance hidden at rest whose
+    /// pose may show it has its file's mesh.
+    std::vector<MeshId> loaded_mesh_ids;
+    std::vector<MeshId> mesh_ids;  ///< Mesh per instance in the prepared layout
     std::size_t loaded_mesh_count = 0;
     std::vector<MeshId> copy_sources;  ///< loaded Mesh of each appended copy, in order
 
@@ -231,10 +233,17 @@ private:
         is_deforming_.assign(scene.instances.size(), false);
         const bool collapses = data_.settings.hidden_pose == GltfHiddenPose::collapsed_mesh;
         for (InstanceId i = 0; i < scene.instances.size(); ++i) {
-            const MeshId mesh = scene.instances[i].mesh_id;
-            data_.loaded_mesh_ids.push_back(mesh);
             const tinygltf::Node& node = model_.nodes[instance_nodes[i]];
-            // A hidden instance stays hidden: its empty mesh is never skinned or morphed.
+            MeshId mesh = scene.instances[i].mesh_id;
+            // Hidden at rest below an animated scale (an object that appears later): posed
+            // from its own mesh like any instance a pose may hide. The loader's mesh ids are
+            // the file's (gltf_scene.cpp).
+            const bool shows_when_posed = mesh == data_.hidden_mesh && node.skin < 0 &&
+                                          node.mesh >= 0 && is_dynamic_node_[instance_nodes[i]];
+            if (shows_when_posed) mesh = MeshId(node.mesh);
+            data_.loaded_mesh_ids.push_back(mesh);
+            // Otherwise a hidden instance stays hidden: its empty mesh is never skinned or
+            // morphed.
             const bool is_skinned = node.skin >= 0 && mesh != data_.hidden_mesh;
             data_.instance_is_skinned[i] = is_skinned;
             // A skinned instance is posed by its joints, whatever its node's transform.

@@ -300,7 +300,7 @@ TEST(GltfHiddenInstances, ZeroScaleInstancesKeepTheirNumberAndAreNeverHit) {
     EXPECT_TRUE(shown.instance_id == 1 || shown.instance_id == 3);  // coplanar, both at z = 0
 }
 
-TEST(GltfHiddenInstances, HiddenInstancesStayHiddenWhenAnimated) {
+TEST(GltfHiddenInstances, HiddenAtRestShowsWhereItsAnimationScalesItUp) {
     GltfTestFile file = triangle_file();
     file.add_node({{"mesh", 0}, {"scale", {0, 0, 0}}});
     file.add_node({{"mesh", 0}});
@@ -317,13 +317,33 @@ TEST(GltfHiddenInstances, HiddenInstancesStayHiddenWhenAnimated) {
            {{"sampler", 1}, {"target", {{"node", 1}, {"path", "translation"}}}}}}}};
     const GltfLoadResult loaded =
         load_gltf_scene_with_report(file.write_glb("hidden_animated.glb"), {.keep_model = true});
-    const GltfAnimator animator(loaded);
-    for (const float time : {0.0f, 0.5f}) {
-        Scene scene = loaded.scene;
-        animator.apply(time, scene);
-        EXPECT_NO_THROW(scene.validate());
-        EXPECT_EQ(scene.instances[0].mesh_id, loaded.report.hidden_mesh);
-        expect_near(scene.instances[1].object_to_world.translation, {0, 0, 8 * time});
+    EXPECT_EQ(loaded.report.hidden_instances, (std::vector<std::uint32_t>{0}));
+    // A ray up through node 0's triangle (at z = 0 from scale 0.5 on), then node 1's (at
+    // z = 8 time): it meets node 0 first wherever that is shown, else node 1.
+    const Ray onto_node_0{{0.1f, 0.1f, -10}, 0, {0, 0, 1}};
+    for (const GltfHiddenPose mode : {GltfHiddenPose::empty_mesh, GltfHiddenPose::collapsed_mesh}) {
+        SCOPED_TRACE(mode == GltfHiddenPose::empty_mesh ? "empty mesh" : "collapsed mesh");
+        const GltfAnimator animator(loaded, {.hidden_pose = mode});
+        EXPECT_EQ(animator.hideable_instances(), (std::vector<InstanceId>{0}));
+        Scene scene = loaded.scene;  // posed again and again, as a frame loop does
+        for (const float time : {0.0f, 0.5f, 1.0f, 0.0f}) {
+            SCOPED_TRACE("time " + std::to_string(time));
+            animator.apply(time, scene);
+            ASSERT_NO_THROW(scene.validate());
+            expect_near(scene.instances[1].object_to_world.translation, {0, 0, 8 * time});
+            const bool is_hidden = time == 0.0f;
+            if (mode == GltfHiddenPose::empty_mesh)
+                EXPECT_EQ(scene.instances[0].mesh_id, is_hidden ? loaded.report.hidden_mesh : 0u);
+            if (!is_hidden) expect_near(scene.instances[0].object_to_world.col_x, {time, 0, 0});
+            const InstanceId first_met = is_hidden ? 1 : 0;
+            const glue::EmbreeFlatAccel embree(scene);
+            const Hit hit = embree.intersect(onto_node_0);
+            ASSERT_TRUE(hit.is_hit());
+            EXPECT_EQ(hit.instance_id, first_met);
+            EXPECT_FLOAT_EQ(hit.t, 10);
+            for (const auto& [name, accel] : test::own_structures(scene, 4.0f))
+                EXPECT_EQ(accel->intersect(onto_node_0).instance_id, first_met) << name;
+        }
     }
 }
 
