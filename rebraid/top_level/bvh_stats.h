@@ -65,15 +65,15 @@ double reached_instances_half_area(const TopLevelBvh& top, std::size_t instance_
 
 /// Half area of the union of instance_world_bounds() over the instances `top`'s items reach:
 /// the box of the scene's world-space triangles, which is the root box of a flat BVH over
-/// them. Every structure's SAH is normalised by it (docs/design.md, "SAH"), so that a top level whose
-/// root box is larger than the scene (transformed boxes of rotated instances) is not given a
+/// them. Every structure's SAH is normalised by it (docs/design.md, "SAH"), so that a top level
+/// whose root box is larger than the scene (transformed boxes of rotated instances) is not given a
 /// smaller SAH for it.
 double instanced_scene_half_area(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,
                                  std::span<const std::uint32_t> instance_mesh,
                                  std::span<const AffineTransform> object_to_world);
 
-/// SAH of a two-level structure (docs/design.md, "SAH"): the top-level inner nodes' half areas plus,
-/// for each item, the cost of its object subtree in world space, over the half area of the
+/// SAH of a two-level structure (docs/design.md, "SAH"): the top-level inner nodes' half areas
+/// plus, for each item, the cost of its object subtree in world space, over the half area of the
 /// scene's box (instanced_scene_half_area). `instance_mesh` and `object_to_world` are indexed
 /// by instance id.
 double top_level_sah(const TopLevelBvh& top, std::span<const ObjectBvh> object_bvhs,

@@ -2,23 +2,30 @@
 
 #include <cstdint>
 
-#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/core/transform.h"
 
 namespace rebraid {
 
-/// What a ray entering an instance reads, in one record per instance: its mesh's BVH arrays
-/// and the space the ray must be mapped into. Entering costs one lookup instead of a chain
-/// (instance -> mesh -> ObjectBvh -> each array, plus the transform elsewhere).
-struct InstanceTarget {
+/// What a ray entering an instance reads, in one cache line per instance: the transform into
+/// its object space, its mesh (whose BVH arrays InstancedAccel::object_views() holds, few and
+/// hot in cache) and its space's id. Entering costs one line instead of a chain (instance ->
+/// mesh -> ObjectBvh -> each array, and the transform in an array of its own: on a million
+/// instances each of those was a miss of its own).
+struct alignas(64) InstanceTarget {
     /// `space` of instances placed by the identity: rays enter them unmapped.
     static constexpr std::uint32_t kWorldSpace = 0;
 
-    ObjectBvhView bvh;
+    /// World to object; the identity for kWorldSpace.
+    AffineTransform to_object = AffineTransform::identity();
+    /// Index into InstancedAccel::object_views().
+    std::uint32_t mesh = 0;
     /// kWorldSpace, or 1 + the index of the instance's world-to-object transform among the
     /// structure's distinct ones. Instances placed by the same transform share a space (a
     /// file's root rotation often places every mesh), so a ray mapped into it once serves
     /// all of them.
     std::uint32_t space = kWorldSpace;
 };
+
+static_assert(sizeof(InstanceTarget) == 64);
 
 }  // namespace rebraid

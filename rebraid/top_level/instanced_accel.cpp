@@ -24,16 +24,15 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     instance_mesh_.reserve(scene.instances.size());
     object_to_world_.reserve(scene.instances.size());
     instance_targets_.reserve(scene.instances.size());
+    object_views_.assign(object_bvhs_.begin(), object_bvhs_.end());
     // Distinct transforms by their exact bits: equal bits map every ray to equal bits.
     std::map<std::array<std::uint32_t, 12>, std::uint32_t> space_of_bits;
     const auto object_space_id = [&](const AffineTransform& to_object) {
         std::array<std::uint32_t, 12> bits;
         static_assert(sizeof(AffineTransform) == sizeof(bits));
         std::memcpy(bits.data(), &to_object, sizeof(bits));
-        const auto [it, is_new] =
-            space_of_bits.try_emplace(bits, std::uint32_t(object_spaces_.size() + 1));
-        if (is_new) object_spaces_.push_back(to_object);
-        return it->second;
+        return space_of_bits.try_emplace(bits, std::uint32_t(space_of_bits.size() + 1))
+            .first->second;
     };
     for (const Instance& instance : scene.instances) {
         if (instance.mesh_id >= object_bvhs_.size())
@@ -41,11 +40,13 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
                         " with " + std::to_string(object_bvhs_.size()) + " object BVHs");
         instance_mesh_.push_back(instance.mesh_id);
         object_to_world_.push_back(instance.object_to_world);
-        const bool is_identity = instance.object_to_world == AffineTransform::identity();
-        instance_targets_.push_back({object_bvhs_[instance.mesh_id],
-                                     is_identity
-                                         ? InstanceTarget::kWorldSpace
-                                         : object_space_id(instance.object_to_world.inverse())});
+        InstanceTarget target;
+        target.mesh = instance.mesh_id;
+        if (instance.object_to_world != AffineTransform::identity()) {
+            target.to_object = instance.object_to_world.inverse();
+            target.space = object_space_id(target.to_object);
+        }
+        instance_targets_.push_back(target);
     }
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
@@ -83,8 +84,9 @@ AccelStats InstancedAccel::stats() const {
         hash.add_value(bvh.root);
         hash.add<PrimId>(bvh.prim_ids);
     }
-    memory += (object_to_world_.size() + object_spaces_.size()) * sizeof(AffineTransform) +
-              instance_targets_.size() * sizeof(InstanceTarget);
+    memory += object_to_world_.size() * sizeof(AffineTransform) +
+              instance_targets_.size() * sizeof(InstanceTarget) +
+              object_views_.size() * sizeof(ObjectBvhView);
     stats.nodes = nodes;
     stats.leaves = leaves;
     stats.memory_bytes = memory;

@@ -27,7 +27,7 @@ public:
     /// for stats(); the rest of the statistics are computed from the structure.
     InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs, TopLevelBvh top,
                    const AccelStats& build_info);
-    // Movable, not copyable: instance_targets() point into the object BVHs' arrays, which a
+    // Movable, not copyable: object_views() point into the object BVHs' arrays, which a
     // move carries along and a copy would not.
     InstancedAccel(InstancedAccel&&) = default;
     InstancedAccel& operator=(InstancedAccel&&) = default;
@@ -51,9 +51,8 @@ public:
     const std::vector<std::uint32_t>& instance_meshes() const { return instance_mesh_; }
     /// What entering each instance reads (index = InstanceId), made at construction.
     const std::vector<InstanceTarget>& instance_targets() const { return instance_targets_; }
-    /// The distinct world-to-object transforms of the instances not placed by the identity:
-    /// InstanceTarget::space s > 0 names object_spaces()[s - 1].
-    const std::vector<AffineTransform>& object_spaces() const { return object_spaces_; }
+    /// The arrays traversal reads of each mesh's object BVH (index = MeshId).
+    const std::vector<ObjectBvhView>& object_views() const { return object_views_; }
 
     /// The kernel level rays are traced with: default_simd_level() at construction.
     SimdLevel simd_level() const { return simd_level_; }
@@ -67,7 +66,7 @@ private:
     std::vector<std::uint32_t> instance_mesh_;
     std::vector<AffineTransform> object_to_world_;
     std::vector<InstanceTarget> instance_targets_;
-    std::vector<AffineTransform> object_spaces_;
+    std::vector<ObjectBvhView> object_views_;
     AccelStats build_info_;
     SimdLevel simd_level_;
     const TraceKernels* kernels_;

@@ -57,14 +57,13 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 /// same numbers, since the identity maps every finite ray exactly.
 class ObjectRayCache {
 public:
-    ObjectRayCache(PreparedRay& world_ray, const InstancedAccel& accel)
-        : world_ray_(world_ray), object_spaces_(accel.object_spaces()) {}
+    explicit ObjectRayCache(PreparedRay& world_ray) : world_ray_(world_ray) {}
 
     PreparedRay& ray_for(const InstanceTarget& target) {
         if (target.space == InstanceTarget::kWorldSpace) return world_ray_;
         const TraversalRay& world = world_ray_.ray;
         if (target.space != space_) {
-            const AffineTransform& to_object = object_spaces_[target.space - 1];
+            const AffineTransform& to_object = target.to_object;
             ray_.emplace(to_object.transform_point(world.org),
                          to_object.transform_vector(world.dir), world.tnear, world.tfar);
             space_ = target.space;
@@ -76,16 +75,15 @@ public:
 
 private:
     PreparedRay& world_ray_;
-    std::span<const AffineTransform> object_spaces_;
     std::uint32_t space_ = InstanceTarget::kWorldSpace;
     std::optional<PreparedRay> ray_;
 };
 
 /// Prefetches what entering the first item of top-level leaf `leaf` reads first.
 inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* targets,
-                                 NodeRef leaf) {
+                                 const ObjectBvhView* views, NodeRef leaf) {
     const TopLevelItem& item = top.items[leaf.first_prim()];
-    const ObjectBvhView& bvh = targets[item.instance_id].bvh;
+    const ObjectBvhView& bvh = views[targets[item.instance_id].mesh];
     if (item.object_node.is_leaf())
         __builtin_prefetch(bvh.triangles + item.object_node.first_prim());
     else
@@ -96,9 +94,10 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
                                                 TraversalCounters* counters) {
     Hit hit;
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    ObjectRayCache object_rays(world_ray, accel);
+    ObjectRayCache object_rays(world_ray);
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
+    const ObjectBvhView* views = accel.object_views().data();
     const auto enter_items = [&](NodeRef leaf) {
         const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
@@ -106,7 +105,8 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
             const InstanceTarget& target = targets[item.instance_id];
             if (counters) ++counters->object_entries;
             PreparedRay& object_ray = object_rays.ray_for(target);
-            if (intersect_object_bvh(target.bvh, item.object_node, object_ray, hit, counters)) {
+            if (intersect_object_bvh(views[target.mesh], item.object_node, object_ray, hit,
+                                     counters)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -115,8 +115,8 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
     };
     // A stacked item's object node is asked for as the item is stacked, as a flat BVH's
     // stacked nodes are: its miss then overlaps the work on nearer items.
-    const auto prefetch_item = [&top, targets](NodeRef leaf) {
-        prefetch_item_target(top, targets, leaf);
+    const auto prefetch_item = [&top, targets, views](NodeRef leaf) {
+        prefetch_item_target(top, targets, views, leaf);
     };
     traverse_bvh(top.nodes.data(), top.root, world_ray, counters, enter_items, prefetch_item);
     return hit;
@@ -124,9 +124,10 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
 
 [[gnu::flatten]] inline bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    ObjectRayCache object_rays(world_ray, accel);
+    ObjectRayCache object_rays(world_ray);
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
+    const ObjectBvhView* views = accel.object_views().data();
     // Any order: the first hit ends the query.
     return traverse_bvh<TraversalOrder::any>(
         top.nodes.data(), top.root, world_ray, nullptr, [&](NodeRef leaf) {
@@ -135,7 +136,7 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
                 const TopLevelItem& item = top.items[i];
                 const InstanceTarget& target = targets[item.instance_id];
                 PreparedRay& object_ray = object_rays.ray_for(target);
-                if (occluded_object_bvh(target.bvh, item.object_node, object_ray, nullptr))
+                if (occluded_object_bvh(views[target.mesh], item.object_node, object_ray, nullptr))
                     return true;
             }
             return false;

@@ -332,8 +332,9 @@ TEST(GltfHiddenInstances, HiddenAtRestShowsWhereItsAnimationScalesItUp) {
             ASSERT_NO_THROW(scene.validate());
             expect_near(scene.instances[1].object_to_world.translation, {0, 0, 8 * time});
             const bool is_hidden = time == 0.0f;
-            if (mode == GltfHiddenPose::empty_mesh)
+            if (mode == GltfHiddenPose::empty_mesh) {
                 EXPECT_EQ(scene.instances[0].mesh_id, is_hidden ? loaded.report.hidden_mesh : 0u);
+            }
             if (!is_hidden) expect_near(scene.instances[0].object_to_world.col_x, {time, 0, 0});
             const InstanceId first_met = is_hidden ? 1 : 0;
             const glue::EmbreeFlatAccel embree(scene);

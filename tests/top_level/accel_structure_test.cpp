@@ -89,11 +89,14 @@ TEST(TwoLevelAccel, InstancesPlacedAlikeShareOneObjectSpace) {
     EXPECT_EQ(targets[1].space, targets[2].space);
     EXPECT_NE(targets[3].space, InstanceTarget::kWorldSpace);
     EXPECT_NE(targets[3].space, targets[1].space);
-    ASSERT_EQ(accel.object_spaces().size(), 2u);
-    EXPECT_EQ(accel.object_spaces()[targets[1].space - 1], turn.inverse());
-    EXPECT_EQ(accel.object_spaces()[targets[3].space - 1], other.inverse());
-    EXPECT_EQ(targets[2].bvh.nodes, accel.object_bvhs()[1].nodes.data());
-    EXPECT_EQ(targets[2].bvh.triangles, accel.object_bvhs()[1].triangles.data());
+    EXPECT_TRUE(targets[0].to_object == AffineTransform::identity());
+    EXPECT_TRUE(targets[1].to_object == turn.inverse());
+    EXPECT_TRUE(targets[2].to_object == turn.inverse());
+    EXPECT_TRUE(targets[3].to_object == other.inverse());
+    EXPECT_EQ(targets[2].mesh, 1u);
+    ASSERT_EQ(accel.object_views().size(), 2u);
+    EXPECT_EQ(accel.object_views()[1].nodes, accel.object_bvhs()[1].nodes.data());
+    EXPECT_EQ(accel.object_views()[1].triangles, accel.object_bvhs()[1].triangles.data());
 }
 
 TEST(TwoLevelAccel, InstanceOfAMeshWithoutObjectBvhIsRefused) {
