@@ -20,8 +20,9 @@ Suites (every command runs from the repository root):
              defaults), written to a temporary folder first
   forests    `rebraid stats FILE --accel A --json` for twolevel and rebraid on
              `rebraid generate trees --instances N` at 100,000 and 1,000,000 instances (255 M
-             and 2.55 G instanced triangles): build times, SAH, memory and peak RSS at scale
-             (--quick: 1,000 instances)
+             and 2.55 G instanced triangles): build times, SAH, memory and peak RSS at scale;
+             and `rebraid bench FILE --accel embree-instanced,twolevel,rebraid --json` on the
+             same files: Mrays/s at scale (--quick: 1,000 instances)
   animate    `rebraid animate --json`: the built-in twisting object in the default scene, and
              each animated shared scene (per ../shared/scenes/MANIFEST.md) as --dynamic in
              ../shared/scenes/cg57_cruiser.glb
@@ -74,6 +75,8 @@ STRUCTURE_ACCELS = ["flat", "twolevel", "rebraid"]
 GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
 # The structures the `forests` suite builds over the large generated forests.
 FOREST_ACCELS = ["twolevel", "rebraid"]
+# The structures the `forests` suite traces rays through on the same forests.
+FOREST_BENCH_ACCELS = ["embree-instanced", "twolevel", "rebraid"]
 ANIMATE_STATIC = f"{SHARED_SCENES}/cg57_cruiser.glb"
 # Used when the MANIFEST cannot be read: the shared scenes it lists with an animation.
 ANIMATED_FALLBACK = ["brainstem", "motion_capture_rom", "animated_morph_cube"]
@@ -177,6 +180,11 @@ def jobs_of(suite, settings, threads):
                 argv += ["--threads", str(threads)] if threads is not None else []
                 # One generation serves both structures.
                 jobs.append((f"{forest}-{accel}", argv, [generate] if index == 0 else []))
+            argv = [BINARY, "bench", f"{TMP}/{forest}.glb", "--accel",
+                    ",".join(FOREST_BENCH_ACCELS), "--rays", str(settings["rays"]),
+                    "--repetitions", str(settings["repetitions"]), "--json"]
+            argv += ["--threads", str(threads)] if threads is not None else []
+            jobs.append((f"{forest}-bench", argv, []))
         return jobs
     if suite == "instructions":
         def count(scene):

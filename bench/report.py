@@ -428,9 +428,10 @@ def section_table1b(runs, accels):
     return "\n".join(out)
 
 
-def section_forests(runs):
+def section_forests(runs, tracing_runs):
     """Table 2b: `rebraid stats` of twolevel and rebraid on the large generated forests, one
-    process per structure and round: medians over the rounds."""
+    process per structure and round: medians over the rounds; then Table 2c from
+    `tracing_runs`, the suite's `rebraid bench` runs."""
     forests = {}
     for run in runs:
         forest, accel = run.name.rsplit("-", 1)
@@ -459,7 +460,30 @@ def section_forests(runs):
             "`rebraid stats` on `rebraid generate trees --instances N`, each structure in its own\n"
             "process (so the ratio is of the medians): full build (object BVHs and top level), the\n"
             "top level alone, SAH, the structure's memory and the process's peak resident memory\n"
-            "(scene, structure and the SAH walk).\n\n" + table(header, rows))
+            "(scene, structure and the SAH walk).\n\n" + table(header, rows)
+            + section_forest_tracing(tracing_runs))
+
+
+def section_forest_tracing(runs):
+    """Table 2c: `rebraid bench` on the same forests: Mrays/s, and ratios taken per round."""
+    if not runs:
+        return ""
+    kinds = (("primary", "mrays_primary"), ("diffuse", "mrays_diffuse"))
+    header = ["forest"]
+    for kind, _ in kinds:
+        header += [f"embree-instanced {kind}", f"twolevel {kind}", f"rebraid {kind}",
+                   f"rebraid / embree-instanced {kind}"]
+    rows = []
+    for run in runs:
+        row = [run.name.rsplit("-", 1)[0]]
+        for _, field in kinds:
+            row += [fmt(run.value("accel", a, field)) for a in
+                    ("embree-instanced", "twolevel", "rebraid")]
+            row.append(fmt_ratio(run.ratio("accel", "rebraid", "embree-instanced", field)))
+        rows.append(row)
+    return ("\n### Table 2c: tracing at scale (Mrays/s)\n\n"
+            "`rebraid bench` on the same forests, all three structures in one process on the same\n"
+            "rays; the ratio is the median of each round's own.\n\n" + table(header, rows))
 
 
 def section_table2(runs, accels):
@@ -618,7 +642,9 @@ def draw_plots(out_file, scene_runs, frame_runs):
 
 def report(results, generated_by, results_dir, plots_out=None):
     runs = group_runs(results)
-    scene_runs = bench_runs(runs)
+    # The forests suite's bench runs go to Table 2c, not the per-scene tables.
+    scene_runs = [run for run in bench_runs(runs) if run.suite != "forests"]
+    forest_tracing = [run for run in bench_runs(runs) if run.suite == "forests"]
     frame_runs = animate_runs(runs)
     accels = ordered_accels(scene_runs)
     links = draw_plots(plots_out, scene_runs, frame_runs) if plots_out else {}
@@ -643,7 +669,7 @@ def report(results, generated_by, results_dir, plots_out=None):
         parts += [section_table1b(scene_runs, accels), instructions,
                   section_table2(scene_runs, accels), section_memory(scene_runs, accels)]
     if forests:
-        parts.append(section_forests(forests))
+        parts.append(section_forests(forests, forest_tracing))
     else:
         parts.append(instructions)
     frames = section_frames(frame_runs)
