@@ -2,8 +2,8 @@
 
 #include <array>
 #include <cstring>
-#include <map>
 #include <string>
+#include <unordered_map>
 
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/error.h"
@@ -25,10 +25,19 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     object_to_world_.reserve(scene.instances.size());
     instance_targets_.reserve(scene.instances.size());
     object_views_.assign(object_bvhs_.begin(), object_bvhs_.end());
-    // Distinct transforms by their exact bits: equal bits map every ray to equal bits.
-    std::map<std::array<std::uint32_t, 12>, std::uint32_t> space_of_bits;
+    // Distinct transforms by their exact bits: equal bits map every ray to equal bits. Ids
+    // in order of first use, so they do not depend on the table's order. A hash table: a
+    // million instances took a second in an ordered map.
+    using TransformBits = std::array<std::uint32_t, 12>;
+    const auto hash_bits = [](const TransformBits& bits) {
+        std::uint64_t hash = 0xcbf29ce484222325ull;  // FNV-1a over the words
+        for (const std::uint32_t word : bits) hash = (hash ^ word) * 0x100000001b3ull;
+        return std::size_t(hash);
+    };
+    std::unordered_map<TransformBits, std::uint32_t, decltype(hash_bits)> space_of_bits(
+        scene.instances.size(), hash_bits);
     const auto object_space_id = [&](const AffineTransform& to_object) {
-        std::array<std::uint32_t, 12> bits;
+        TransformBits bits;
         static_assert(sizeof(AffineTransform) == sizeof(bits));
         std::memcpy(bits.data(), &to_object, sizeof(bits));
         return space_of_bits.try_emplace(bits, std::uint32_t(space_of_bits.size() + 1))
