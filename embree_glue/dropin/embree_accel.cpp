@@ -2,7 +2,6 @@
 
 #include <tbb/parallel_for.h>
 
-#include <algorithm>
 #include <array>
 #include <limits>
 #include <optional>
@@ -78,21 +77,6 @@ std::vector<AffineTransform> embree_world_to_object_maps(const Scene& scene) {
     return maps;
 }
 
-/// index = MeshId, then PrimId: where the triangle sits in its object BVH's leaf order
-/// (kInvalidId for a triangle the BVH does not hold).
-std::vector<std::vector<std::uint32_t>> leaf_positions_of(const InstancedAccel& accel) {
-    std::vector<std::vector<std::uint32_t>> positions(accel.object_bvhs().size());
-    for (std::size_t m = 0; m < positions.size(); ++m) {
-        const std::vector<PrimId>& prim_ids = accel.object_bvhs()[m].prim_ids;
-        const PrimId largest =
-            prim_ids.empty() ? 0 : *std::max_element(prim_ids.begin(), prim_ids.end());
-        positions[m].assign(prim_ids.empty() ? 0 : std::size_t(largest) + 1, kInvalidId);
-        for (std::size_t i = 0; i < prim_ids.size(); ++i)
-            positions[m][prim_ids[i]] = std::uint32_t(i);
-    }
-    return positions;
-}
-
 }  // namespace
 
 void EmbreeAccelSettings::validate() const {
@@ -117,7 +101,6 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
     object_builder_ = make_object_builder(settings_);
     accel_ = std::make_unique<InstancedAccel>(
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
-    leaf_positions_ = leaf_positions_of(*accel_);
     bounds_ = converted_.scene.bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
 }
@@ -152,22 +135,16 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     if (!(in.tnear <= in.tfar)) return;
     if (is_ray_mask_supported_ && in.mask == 0) return;
     const Ray ray = glue::from_embree_ray(in);
-    const Hit hit = accel_->intersect(ray);
+    const LocatedHit located = accel_->intersect_located(ray);
+    const Hit& hit = located.hit;
     if (!hit.is_hit()) return;
-    const MeshId mesh_id = converted_.scene.instances[hit.instance_id].mesh_id;
     const glue::EmbreeHitIds& ids = converted_.instance_ids[hit.instance_id];
-    // The corners from the object BVH's leaf copy, which the traversal has just read (the
-    // mesh's index and vertex arrays would cost two dependent cache misses on large scenes).
-    std::array<Vec3f, 3> corners;
-    const std::vector<std::uint32_t>& positions = leaf_positions_[mesh_id];
-    const std::uint32_t position =
-        hit.prim_id < positions.size() ? positions[hit.prim_id] : kInvalidId;
-    if (position != kInvalidId) {
-        const TriangleVerts& triangle = accel_->object_bvhs()[mesh_id].triangles[position];
-        corners = {triangle.v0, triangle.v1, triangle.v2};
-    } else {
-        corners = converted_.scene.meshes[mesh_id].corners(hit.prim_id);
-    }
+    // The corners from the object BVH's leaf-order copy, which the query prefetched as it
+    // found the hit (the mesh's index and vertex arrays would cost two dependent cache
+    // misses on large scenes).
+    const MeshId mesh_id = accel_->instance_targets()[hit.instance_id].mesh;
+    const TriangleVerts& triangle = accel_->object_bvhs()[mesh_id].triangles[located.leaf_position];
+    const std::array<Vec3f, 3> corners = {triangle.v0, triangle.v1, triangle.v2};
     // Our traversal found the triangle and t; the reported attributes are computed again the
     // way Embree computes them (its world-to-object map, its kernel's rounding), so that they
     // agree with rtcIntersect1 to the last bit where Embree finds the same triangle.
@@ -241,12 +218,10 @@ EmbreeUpdateReport EmbreeAccel::update() {
         next_accel = build_top(next.scene, std::move(object_bvhs), settings_.rebraid, timer);
     }
     std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
-    std::vector<std::vector<std::uint32_t>> leaf_positions = leaf_positions_of(*next_accel);
     bounds_ = next.scene.bounds();
     converted_ = std::move(next);
     accel_ = std::move(next_accel);
     embree_world_to_object_ = std::move(world_to_object);
-    leaf_positions_ = std::move(leaf_positions);
     report.update_ms = timer.elapsed_ms();
     return report;
 }

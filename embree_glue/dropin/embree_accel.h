@@ -137,9 +137,6 @@ private:
     /// index = InstanceId: Embree's world-to-object map of the instance (its float inverse of
     /// the registered transform, rounded as Embree rounds it); unused for root-scene meshes.
     std::vector<AffineTransform> embree_world_to_object_;
-    /// index = MeshId, then PrimId: the triangle's position in its object BVH's leaf order,
-    /// where intersect1 reads its corners.
-    std::vector<std::vector<std::uint32_t>> leaf_positions_;
     /// index = MeshId: the state of each mesh's updates (reset by a full rebuild).
     std::vector<std::unique_ptr<ObjectBvhUpdater>> updaters_;
 };

@@ -164,18 +164,25 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
 /// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v/prim_id (mesh primID) and
 /// returns true; leaves hit.instance_id to the caller.
+/// With `leaf_position` given, also sets it to the hit's leaf-order position and prefetches,
+/// with every closer hit, the hit triangle's corner copy (bvh.triangles), which that caller
+/// reads next.
 inline bool intersect_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit,
-                                 TraversalCounters* counters) {
+                                 TraversalCounters* counters,
+                                 std::uint32_t* leaf_position = nullptr) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids;
-    const auto prefetch_prim_ids = [prim_ids](std::uint32_t position) {
+    const TriangleVerts* corners = leaf_position != nullptr ? bvh.triangles : nullptr;
+    const auto prefetch_hit_data = [prim_ids, corners](std::uint32_t position) {
         __builtin_prefetch(prim_ids + position);
+        if (corners != nullptr) __builtin_prefetch(corners + position);
     };
     if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,
-                                         prefetch_prim_ids))
+                                         prefetch_hit_data))
         return false;
     hit = leaf_order_hit;
     hit.prim_id = prim_ids[leaf_order_hit.prim_id];
+    if (leaf_position != nullptr) *leaf_position = leaf_order_hit.prim_id;
     return true;
 }
 

@@ -11,6 +11,7 @@
 #include "rebraid/core/simd_level.h"
 #include "rebraid/core/transform.h"
 #include "rebraid/top_level/instance_target.h"
+#include "rebraid/top_level/located_hit.h"
 #include "rebraid/top_level/top_level_bvh.h"
 
 namespace rebraid {
@@ -37,6 +38,8 @@ public:
     Hit intersect_counted(const Ray& ray, TraversalCounters* counters) const override;
     bool occluded(const Ray& ray) const override;
     AccelStats stats() const override;
+    /// The closest hit, as intersect(), and where its triangle's corners are kept.
+    LocatedHit intersect_located(const Ray& ray) const;
 
     const TopLevelBvh& top_level() const { return top_; }
     const std::vector<ObjectBvh>& object_bvhs() const { return object_bvhs_; }

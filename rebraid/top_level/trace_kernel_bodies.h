@@ -90,8 +90,10 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
         prefetch_node(bvh.nodes, item.object_node);
 }
 
-[[gnu::flatten]] inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
-                                                TraversalCounters* counters) {
+/// The closest hit of an instanced structure; with `leaf_position` given, also where the hit
+/// triangle is kept (intersect_object_bvh).
+inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
+                                 TraversalCounters* counters, std::uint32_t* leaf_position) {
     Hit hit;
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray);
@@ -106,7 +108,7 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
             if (counters) ++counters->object_entries;
             PreparedRay& object_ray = object_rays.ray_for(target);
             if (intersect_object_bvh(views[target.mesh], item.object_node, object_ray, hit,
-                                     counters)) {
+                                     counters, leaf_position)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -120,6 +122,18 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
     };
     traverse_bvh(top.nodes.data(), top.root, world_ray, counters, enter_items, prefetch_item);
     return hit;
+}
+
+[[gnu::flatten]] inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
+                                                TraversalCounters* counters) {
+    return instanced_closest_hit(accel, ray, counters, nullptr);
+}
+
+[[gnu::flatten]] inline LocatedHit instanced_intersect_located(const InstancedAccel& accel,
+                                                               const Ray& ray) {
+    LocatedHit located;
+    located.hit = instanced_closest_hit(accel, ray, nullptr, &located.leaf_position);
+    return located;
 }
 
 [[gnu::flatten]] inline bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
@@ -145,7 +159,8 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
 
 /// This level's entry points.
 inline constexpr TraceKernels kLevelTraceKernels{&flat_intersect, &flat_occluded,
-                                                 &instanced_intersect, &instanced_occluded};
+                                                 &instanced_intersect, &instanced_occluded,
+                                                 &instanced_intersect_located};
 
 }  // namespace REBRAID_SIMD_NAMESPACE
 }  // namespace rebraid

@@ -3,6 +3,7 @@
 #include "rebraid/core/accel.h"
 #include "rebraid/core/ray.h"
 #include "rebraid/core/simd_level.h"
+#include "rebraid/top_level/located_hit.h"
 
 namespace rebraid {
 
@@ -18,6 +19,7 @@ struct TraceKernels {
     Hit (*instanced_intersect)(const InstancedAccel& accel, const Ray& ray,
                                TraversalCounters* counters);
     bool (*instanced_occluded)(const InstancedAccel& accel, const Ray& ray);
+    LocatedHit (*instanced_intersect_located)(const InstancedAccel& accel, const Ray& ray);
 };
 
 /// The kernels of `level`. Throws rebraid::Error when this build or this CPU cannot run it.
