@@ -4,16 +4,20 @@
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
+#include <bit>
 #include <functional>
 
 #include "rebraid/core/error.h"
+#include "rebraid/core/simd_level.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/io/gltf_scene.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instanced_accel.h"
 #include "support/containment.h"
 #include "support/hit_comparison.h"
 #include "support/reachability.h"
+#include "support/test_rays.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -97,6 +101,45 @@ TEST(TwoLevelAccel, InstancesPlacedAlikeShareOneObjectSpace) {
     ASSERT_EQ(accel.object_views().size(), 2u);
     EXPECT_EQ(accel.object_views()[1].nodes, accel.object_bvhs()[1].nodes.data());
     EXPECT_EQ(accel.object_views()[1].triangles, accel.object_bvhs()[1].triangles.data());
+}
+
+// intersect_located is the closest hit of intersect() and names where its triangle is kept:
+// the leaf-order position whose prim_ids entry is the hit's primID (the Embree glue reads the
+// hit's corners there), at every kernel level.
+TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesLeafPosition) {
+    for (const test::NamedScene& named : all_scenes()) {
+        for (bool rebraided : {false, true}) {
+            InstancedAccel accel =
+                rebraided ? build_rebraid_accel(named.scene) : build_two_level_accel(named.scene);
+            const std::vector<Ray> rays = test::varied_rays(accel, named.scene.bounds(), 2000, 7);
+            for (SimdLevel level : runnable_simd_levels()) {
+                SCOPED_TRACE(named.name + (rebraided ? " / rebraid / " : " / twolevel / ") +
+                             std::string(simd_level_name(level)));
+                accel.set_simd_level(level);
+                std::size_t hits = 0, wrong = 0;
+                for (const Ray& ray : rays) {
+                    const Hit hit = accel.intersect(ray);
+                    const LocatedHit located = accel.intersect_located(ray);
+                    const bool same_hit = std::bit_cast<std::uint32_t>(hit.t) ==
+                                              std::bit_cast<std::uint32_t>(located.hit.t) &&
+                                          hit.instance_id == located.hit.instance_id &&
+                                          hit.prim_id == located.hit.prim_id &&
+                                          hit.u == located.hit.u && hit.v == located.hit.v;
+                    bool located_right = located.leaf_position == kInvalidId;
+                    if (hit.is_hit()) {
+                        ++hits;
+                        const ObjectBvh& bvh =
+                            accel.object_bvhs()[accel.instance_meshes()[hit.instance_id]];
+                        located_right = located.leaf_position < bvh.prim_ids.size() &&
+                                        bvh.prim_ids[located.leaf_position] == hit.prim_id;
+                    }
+                    wrong += !(same_hit && located_right);
+                }
+                EXPECT_EQ(wrong, 0u);
+                EXPECT_GT(hits, rays.size() / 50);  // the check saw hits
+            }
+        }
+    }
 }
 
 TEST(TwoLevelAccel, InstanceOfAMeshWithoutObjectBvhIsRefused) {
