@@ -19,10 +19,9 @@ struct alignas(64) InstanceTarget {
     AffineTransform to_object = AffineTransform::identity();
     /// Index into InstancedAccel::object_views().
     std::uint32_t mesh = 0;
-    /// kWorldSpace, or 1 + the index of the instance's world-to-object transform among the
-    /// structure's distinct ones. Instances placed by the same transform share a space (a
-    /// file's root rotation often places every mesh), so a ray mapped into it once serves
-    /// all of them.
+    /// kWorldSpace, or 1 + the number of the first instance placed by a transform of the
+    /// same bits. Instances placed by the same transform share a space (a file's root
+    /// rotation often places every mesh), so a ray mapped into it once serves all of them.
     std::uint32_t space = kWorldSpace;
 };
 

@@ -3,16 +3,72 @@
 #include <array>
 #include <cstring>
 #include <string>
-#include <unordered_map>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/error.h"
+#include "rebraid/core/huge_pages.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/top_level/bvh_stats.h"
 #include "rebraid/top_level/trace_kernels.h"
 #include "rebraid/top_level/two_level_builder.h"
 
 namespace rebraid {
+namespace {
+
+bool same_bits(const AffineTransform& a, const AffineTransform& b) {
+    return std::memcmp(&a, &b, sizeof(AffineTransform)) == 0;
+}
+
+/// Instances placed by transforms of equal bits share one space, the lowest `space` among
+/// them (each mapped instance's own number on entry): equal bits map every ray to equal bits,
+/// so a ray mapped once serves all of them (a file's root rotation often places every mesh).
+/// Sorted by a hash of the bits, then compared exactly within equal hashes: parallel, and
+/// the answer depends on the instances only.
+void share_object_spaces(std::vector<InstanceTarget>& targets) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;  // (hash, instance)
+    reserve_on_huge_pages(keyed, targets.size());
+    for (std::size_t i = 0; i < targets.size(); ++i)
+        if (targets[i].space != InstanceTarget::kWorldSpace) keyed.push_back({0, std::uint32_t(i)});
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keyed.size()), [&](const auto& range) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            std::array<std::uint32_t, 12> bits;
+            static_assert(sizeof(AffineTransform) == sizeof(bits));
+            std::memcpy(bits.data(), &targets[keyed[k].second].to_object, sizeof(bits));
+            std::uint64_t hash = 0xcbf29ce484222325ull;  // FNV-1a over the words
+            for (const std::uint32_t word : bits) hash = (hash ^ word) * 0x100000001b3ull;
+            keyed[k].first = hash;
+        }
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    // Runs of one hash: almost always one transform, in instance order, so the first of each
+    // distinct transform in a run is its lowest instance.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keyed.size()), [&](const auto& range) {
+        std::vector<std::uint32_t> firsts;
+        for (std::size_t begin = range.begin(); begin != range.end(); ++begin) {
+            if (begin > 0 && keyed[begin - 1].first == keyed[begin].first) continue;
+            firsts.clear();
+            for (std::size_t k = begin; k < keyed.size() && keyed[k].first == keyed[begin].first;
+                 ++k) {
+                InstanceTarget& target = targets[keyed[k].second];
+                bool is_shared = false;
+                for (const std::uint32_t first : firsts)
+                    if (same_bits(targets[first].to_object, target.to_object)) {
+                        target.space = targets[first].space;
+                        is_shared = true;
+                        break;
+                    }
+                if (!is_shared) firsts.push_back(keyed[k].second);
+            }
+        }
+    });
+}
+
+}  // namespace
 
 InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs,
                                TopLevelBvh top, const AccelStats& build_info)
@@ -21,42 +77,43 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
       build_info_(build_info),
       simd_level_(default_simd_level()),
       kernels_(&trace_kernels(simd_level_)) {
-    instance_mesh_.reserve(scene.instances.size());
-    object_to_world_.reserve(scene.instances.size());
-    instance_targets_.reserve(scene.instances.size());
-    object_views_.assign(object_bvhs_.begin(), object_bvhs_.end());
-    // Distinct transforms by their exact bits: equal bits map every ray to equal bits. Ids
-    // in order of first use, so they do not depend on the table's order. A hash table: a
-    // million instances took a second in an ordered map.
-    using TransformBits = std::array<std::uint32_t, 12>;
-    const auto hash_bits = [](const TransformBits& bits) {
-        std::uint64_t hash = 0xcbf29ce484222325ull;  // FNV-1a over the words
-        for (const std::uint32_t word : bits) hash = (hash ^ word) * 0x100000001b3ull;
-        return std::size_t(hash);
-    };
-    std::unordered_map<TransformBits, std::uint32_t, decltype(hash_bits)> space_of_bits(
-        scene.instances.size(), hash_bits);
-    const auto object_space_id = [&](const AffineTransform& to_object) {
-        TransformBits bits;
-        static_assert(sizeof(AffineTransform) == sizeof(bits));
-        std::memcpy(bits.data(), &to_object, sizeof(bits));
-        return space_of_bits.try_emplace(bits, std::uint32_t(space_of_bits.size() + 1))
-            .first->second;
-    };
-    for (const Instance& instance : scene.instances) {
+    // The instance records count as top-level build time: a frame that moves instances makes
+    // them again (a million instances: hundreds of milliseconds).
+    const BuildTimer timer;
+    const std::size_t count = scene.instances.size();
+    for (const Instance& instance : scene.instances)
         if (instance.mesh_id >= object_bvhs_.size())
             throw Error("InstancedAccel: instance of mesh " + std::to_string(instance.mesh_id) +
                         " with " + std::to_string(object_bvhs_.size()) + " object BVHs");
-        instance_mesh_.push_back(instance.mesh_id);
-        object_to_world_.push_back(instance.object_to_world);
-        InstanceTarget target;
-        target.mesh = instance.mesh_id;
-        if (instance.object_to_world != AffineTransform::identity()) {
-            target.to_object = instance.object_to_world.inverse();
-            target.space = object_space_id(target.to_object);
+    object_views_.assign(object_bvhs_.begin(), object_bvhs_.end());
+    // On huge pages when large: fewer first-touch faults, and rays reach the records of
+    // instances all over the scene.
+    reserve_on_huge_pages(instance_mesh_, count);
+    reserve_on_huge_pages(object_to_world_, count);
+    reserve_on_huge_pages(instance_targets_, count);
+    instance_mesh_.resize(count);
+    object_to_world_.resize(count);
+    instance_targets_.resize(count);
+    // The records in parallel: a million instances, each an inverse and a 64-byte record.
+    // `space` is first the instance's own number; below, instances placed alike take the
+    // lowest number among them.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const Instance& instance = scene.instances[i];
+            instance_mesh_[i] = instance.mesh_id;
+            object_to_world_[i] = instance.object_to_world;
+            InstanceTarget& target = instance_targets_[i];
+            target.mesh = instance.mesh_id;
+            if (instance.object_to_world != AffineTransform::identity()) {
+                target.to_object = instance.object_to_world.inverse();
+                target.space = std::uint32_t(i + 1);
+            }
         }
-        instance_targets_.push_back(target);
-    }
+    });
+    share_object_spaces(instance_targets_);
+    const double records_ms = timer.elapsed_ms();
+    build_info_.build_ms += records_ms;
+    build_info_.top_build_ms = build_info_.top_build_ms.value_or(0.0) + records_ms;
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
     build_info_.meshes = scene.meshes.size();

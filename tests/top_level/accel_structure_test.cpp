@@ -142,6 +142,31 @@ TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesLeafPosition) {
     }
 }
 
+TEST(TwoLevelAccel, ManyInstancesPlacedAlikeShareTheSpaceOfTheFirst) {
+    // 20,000 instances cycling through 7 placements (the identity among them): the records
+    // are made in parallel, and each run of equal transforms spans many of its ranges.
+    Scene scene;
+    scene.meshes.push_back({"tri", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}});
+    constexpr std::uint32_t kPlacements = 7;
+    for (std::uint32_t i = 0; i < 20000; ++i) {
+        const std::uint32_t p = (i * 3) % kPlacements;
+        scene.instances.push_back(
+            {0, p == 0 ? AffineTransform::identity()
+                       : AffineTransform::translate({float(p), 0, 0}) *
+                             AffineTransform::rotate({0, 1, 0}, 0.1f * float(p))});
+    }
+    const InstancedAccel accel = build_two_level_accel(scene);
+    std::vector<std::uint32_t> first_of(kPlacements, kInvalidId);
+    std::size_t wrong = 0;
+    for (std::uint32_t i = 0; i < scene.instances.size(); ++i) {
+        const std::uint32_t p = (i * 3) % kPlacements;
+        if (first_of[p] == kInvalidId) first_of[p] = i;
+        const std::uint32_t expected = p == 0 ? InstanceTarget::kWorldSpace : first_of[p] + 1;
+        wrong += accel.instance_targets()[i].space != expected;
+    }
+    EXPECT_EQ(wrong, 0u);
+}
+
 TEST(TwoLevelAccel, InstanceOfAMeshWithoutObjectBvhIsRefused) {
     Scene scene;
     scene.meshes.push_back({"tri", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}});
