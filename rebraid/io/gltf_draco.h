@@ -1,8 +1,9 @@
 #pragma once
 
-// KHR_draco_mesh_compression (internal to rebraid::io): a primitive whose positions and
-// triangles are stored as one Draco-compressed mesh.
+// KHR_draco_mesh_compression (internal to rebraid::io): a primitive whose positions,
+// triangles and possibly other attributes are stored as one Draco-compressed mesh.
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -38,5 +39,16 @@ bool uses_gltf_draco(const tinygltf::Primitive& primitive);
 GltfDracoGeometry decode_gltf_draco_primitive(
     const tinygltf::Model& model, const tinygltf::Primitive& primitive, const std::string& where,
     const std::string& error_prefix, std::uint64_t max_vertices, std::uint64_t max_triangles);
+
+/// The texture coordinates the extension of `primitive` names `name` (e.g. "TEXCOORD_0"),
+/// decoded from its Draco mesh in Draco's point order (the order of the primitive's decoded
+/// positions); empty when the extension does not name that attribute (the primitive then
+/// stores it uncompressed, as any attribute). Throws rebraid::Error as
+/// decode_gltf_draco_primitive does, and for an attribute of fewer than 2 components.
+std::vector<std::array<float, 2>> decode_gltf_draco_texcoords(const tinygltf::Model& model,
+                                                              const tinygltf::Primitive& primitive,
+                                                              const std::string& name,
+                                                              const std::string& where,
+                                                              const std::string& error_prefix);
 
 }  // namespace rebraid

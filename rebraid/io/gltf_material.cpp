@@ -2,11 +2,13 @@
 
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 
 #include "rebraid/core/error.h"
 #include "rebraid/io/gltf_accessor.h"
+#include "rebraid/io/gltf_draco.h"
 
 namespace rebraid {
 namespace {
@@ -180,6 +182,24 @@ std::vector<std::vector<std::array<float, 2>>> read_gltf_base_colour_uvs(
             const std::string role = attribute + " of mesh " + std::to_string(m) + " primitive " +
                                      std::to_string(range.gltf_primitive);
             const std::string prefix = "glTF base colour texture coordinates: ";
+            if (uses_gltf_draco(primitive)) {
+                std::vector<std::array<float, 2>> decoded =
+                    decode_gltf_draco_texcoords(model, primitive, attribute,
+                                                "mesh " + std::to_string(m) + " primitive " +
+                                                    std::to_string(range.gltf_primitive),
+                                                prefix);
+                if (!decoded.empty()) {
+                    if (decoded.size() != range.vertex_count)
+                        throw Error(prefix + role + " decodes " + std::to_string(decoded.size()) +
+                                    " points, the primitive has " +
+                                    std::to_string(range.vertex_count) + " positions");
+                    if (uvs[m].empty())
+                        uvs[m].assign(loaded.scene.meshes[m].positions.size(), {0, 0});
+                    std::copy(decoded.begin(), decoded.end(),
+                              uvs[m].begin() + std::ptrdiff_t(range.first_vertex));
+                    continue;
+                }
+            }
             const GltfElementRange elements =
                 resolve_gltf_accessor(model, found->second, role, prefix);
             const tinygltf::Accessor& accessor =

@@ -66,7 +66,8 @@ std::vector<GltfImageSource> read_gltf_image_sources(const GltfLoadResult& loade
 /// loaded primitive whose material has a base colour texture contributes the TEXCOORD_n set
 /// that texture names, in vertex order (GltfPrimitiveRange); vertices of other primitives, and
 /// of primitives lacking that attribute, get (0, 0). A mesh with no coordinates at all gets an
-/// empty list. Float and normalized unsigned byte/short coordinates are read. Throws
+/// empty list. Float and normalized unsigned byte/short coordinates are read, and those a
+/// KHR_draco_mesh_compression primitive compresses are decoded with its mesh. Throws
 /// rebraid::Error naming the mesh and primitive for an attribute of another type, a count
 /// that differs from the primitive's positions, or an accessor outside its buffer.
 std::vector<std::vector<std::array<float, 2>>> read_gltf_base_colour_uvs(

@@ -1,21 +1,25 @@
 // Copies of shared scenes made by the glTF Transform command line (tests/io/assets, remade by
-// make_assets.sh): quantized and meshopt-compressed, Draco-compressed, and GPU-instanced. Each
+// make_assets.sh): quantized and meshopt-compressed, Draco-compressed, and GPU-instanced; and
+// of a small textured grid, whose texture coordinates the copies must keep. Each
 // copy is traced by Embree against the original (same instances, distances within the
 // quantization error) and by the project's structures against Embree on the copy's own
 // world-space triangles.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "embree_glue/reference/embree_reference.h"
 #include "rebraid/core/error.h"
+#include "rebraid/io/gltf_material.h"
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/rebraiding/rebraid_builder.h"
@@ -117,6 +121,58 @@ INSTANTIATE_TEST_SUITE_P(Assets, GltfCompressedCopy, testing::ValuesIn(kCopies),
                              return test::test_name_of(info.param.copy);
                          });
 
+// ---- Texture coordinates ----------------------------------------------------------------------
+
+struct LoadedUvs {
+    Scene scene;
+    std::vector<std::array<float, 2>> uvs;  ///< of mesh 0
+};
+
+LoadedUvs load_base_colour_uvs(const std::string& asset) {
+    GltfLoadOptions options;
+    options.keep_model = true;
+    const GltfLoadResult loaded = load_gltf_scene_with_report(
+        std::string(REBRAID_SOURCE_DIR) + "/tests/io/assets/" + asset, options);
+    std::vector<std::vector<std::array<float, 2>>> uvs =
+        read_gltf_base_colour_uvs(loaded, read_gltf_materials(loaded));
+    return {loaded.scene, uvs.empty() ? std::vector<std::array<float, 2>>{} : uvs[0]};
+}
+
+// The copies' texture coordinates are the original's within their quantization (12 bits over
+// [0, 1] for both tools' defaults): Draco decodes them with its mesh, meshopt stores them as
+// normalized shorts. Vertices are matched by world position (Draco reorders its points).
+TEST(GltfCompressedTextures, CopiesKeepTheBaseColourTextureCoordinates) {
+    const LoadedUvs original = load_base_colour_uvs("textured_grid.glb");
+    ASSERT_EQ(original.scene.meshes.size(), 1u);
+    ASSERT_EQ(original.uvs.size(), original.scene.meshes[0].positions.size());
+    for (const char* copy_name : {"textured_grid_draco.glb", "textured_grid_meshopt.glb"}) {
+        SCOPED_TRACE(copy_name);
+        const LoadedUvs copy = load_base_colour_uvs(copy_name);
+        ASSERT_EQ(copy.scene.instances.size(), 1u);
+        const std::vector<Vec3f>& positions = copy.scene.meshes[0].positions;
+        ASSERT_EQ(copy.uvs.size(), positions.size());
+        const AffineTransform& to_world = copy.scene.instances[0].object_to_world;
+        std::size_t matched = 0;
+        float largest_error = 0.0f;
+        for (std::size_t v = 0; v < positions.size(); ++v) {
+            const Vec3f world = to_world.transform_point(positions[v]);
+            std::size_t nearest = 0;
+            float nearest_distance = std::numeric_limits<float>::infinity();
+            for (std::size_t o = 0; o < original.uvs.size(); ++o) {
+                const float distance = length(original.scene.meshes[0].positions[o] - world);
+                if (distance < nearest_distance) nearest_distance = distance, nearest = o;
+            }
+            if (nearest_distance > 1e-3f) continue;
+            ++matched;
+            for (int c = 0; c < 2; ++c)
+                largest_error =
+                    std::max(largest_error, std::abs(copy.uvs[v][c] - original.uvs[nearest][c]));
+        }
+        EXPECT_EQ(matched, positions.size());
+        EXPECT_LE(largest_error, 1.0f / 4095.0f);
+    }
+}
+
 // ---- Broken compressed files ------------------------------------------------------------------
 
 /// An asset opened for editing: its JSON and BIN chunk.
@@ -211,6 +267,24 @@ TEST(GltfCompressedErrors, BrokenMeshoptData) {
          // A view that reads the fallback buffer without being compressed.
          {"runs past the end of buffer 1",
           [](test::GltfTestFile& f) { f.json["bufferViews"][1].erase("extensions"); }}});
+}
+
+TEST(GltfCompressedErrors, DracoTextureCoordinatesNamingAMissingAttribute) {
+    test::GltfTestFile file = open_asset("textured_grid_draco.glb");
+    file.json["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"]
+             ["attributes"]["TEXCOORD_0"] = 9;
+    GltfLoadOptions options;
+    options.keep_model = true;
+    const GltfLoadResult loaded =
+        load_gltf_scene_with_report(file.write_glb("broken_textured_grid_draco.glb"), options);
+    try {
+        read_gltf_base_colour_uvs(loaded, read_gltf_materials(loaded));
+        ADD_FAILURE() << "no error";
+    } catch (const Error& error) {
+        EXPECT_NE(std::string(error.what()).find("has no attribute 9 (TEXCOORD_0)"),
+                  std::string::npos)
+            << error.what();
+    }
 }
 
 }  // namespace

@@ -17,6 +17,10 @@ gltf-transform draco "$scenes/chinese_dragon.glb" chinese_dragon_draco.glb
 # (the instanced file alone is 780 KB).
 gltf-transform instance "$scenes/fzk_haus.glb" "$work/fzk_haus_instanced.glb"
 gltf-transform meshopt "$work/fzk_haus_instanced.glb" fzk_haus_instanced_meshopt.glb
+# A small textured grid (its texture coordinates compressed along with the positions).
+python3 make_textured_grid.py textured_grid.glb
+gltf-transform draco textured_grid.glb textured_grid_draco.glb
+gltf-transform meshopt textured_grid.glb textured_grid_meshopt.glb
 
 # Fuzz seeds for the same paths (tests/fuzz/make_gltf_seeds.py keeps them): copies of shrunk
 # shared-scene seeds, small enough for fuzz.sh's -max_len.
