@@ -1,6 +1,6 @@
-// libFuzzer target: the glTF loader (load_gltf_scene) on arbitrary bytes. Every input must
-// either throw rebraid::Error or give a scene that passes Scene::validate() and the loader's
-// documented limits.
+// libFuzzer target: the glTF loader (load_gltf_scene) on arbitrary bytes, then the materials
+// and texture coordinates the renderer reads. Every input must either throw rebraid::Error or
+// give a scene that passes Scene::validate() and the loader's documented limits.
 //
 // The container follows the content, as for a file on disk: an input starting with the
 // binary glTF magic "glTF" is written as a .glb, anything else as a .gltf (JSON text), byte
@@ -18,6 +18,7 @@
 #include <string>
 
 #include "rebraid/core/error.h"
+#include "rebraid/io/gltf_material.h"
 #include "rebraid/io/gltf_scene.h"
 
 namespace {
@@ -60,11 +61,21 @@ bool verbose() {
 void load_and_check(const std::string& path) {
     // Small limits: an input may declare huge counts, but the loader must refuse them
     // before it allocates, which these limits make cheap to check.
-    const rebraid::GltfLoadOptions options{
-        .max_triangles = 1u << 20, .max_vertices = 1u << 20, .max_instances = 1u << 20};
+    const rebraid::GltfLoadOptions options{.max_triangles = 1u << 20,
+                                           .max_vertices = 1u << 20,
+                                           .max_instances = 1u << 20,
+                                           .keep_model = true};
     try {
-        const rebraid::Scene scene = rebraid::load_gltf_scene(path, options);
+        const rebraid::GltfLoadResult loaded = rebraid::load_gltf_scene_with_report(path, options);
+        const rebraid::Scene& scene = loaded.scene;
         scene.validate();  // the loader promises a valid scene
+        // What the renderer reads next: materials and base colour texture coordinates (also
+        // decoded from Draco), one per vertex of each mesh that has any.
+        const auto uvs =
+            rebraid::read_gltf_base_colour_uvs(loaded, rebraid::read_gltf_materials(loaded));
+        if (uvs.size() != scene.meshes.size()) std::abort();
+        for (std::size_t m = 0; m < uvs.size(); ++m)
+            if (!uvs[m].empty() && uvs[m].size() != scene.meshes[m].positions.size()) std::abort();
         if (scene.instances.empty()) std::abort();
         if (scene.mesh_triangle_count() > options.max_triangles) std::abort();
         if (scene.instances.size() > options.max_instances) std::abort();

@@ -31,3 +31,5 @@ gltf-transform meshopt "$seeds/tool_two_cylinder_engine_instanced.glb" \
     "$seeds/tool_two_cylinder_engine_instanced_meshopt.glb"
 gltf-transform draco "$seeds/scene_fzk_haus.glb" "$seeds/tool_fzk_haus_draco.glb"
 gltf-transform quantize "$seeds/scene_fzk_haus.glb" "$seeds/tool_fzk_haus_quantized.glb"
+cp textured_grid_draco.glb "$seeds/tool_textured_grid_draco.glb"
+cp textured_grid_meshopt.glb "$seeds/tool_textured_grid_meshopt.glb"
