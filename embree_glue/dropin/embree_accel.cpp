@@ -2,7 +2,10 @@
 
 #include <tbb/parallel_for.h>
 
+#include <immintrin.h>
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
@@ -102,6 +105,7 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
     accel_ = std::make_unique<InstancedAccel>(
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
     bounds_ = converted_.scene.bounds();
+    pad_bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
 }
 
@@ -128,12 +132,53 @@ glue::ConvertedEmbreeScene EmbreeAccel::convert_now() const {
     return glue::convert_embree_scene(*snapshot, is_ray_mask_supported_);
 }
 
+void EmbreeAccel::pad_bounds() {
+    // A margin far above the rounding of hit points on the scene's triangles.
+    BBox3f padded = bounds_;
+    for (int a = 0; a < 3; ++a) {
+        const float pad = 1e-3f * (bounds_.max[a] - bounds_.min[a]) +
+                          1e-4f * std::max(std::abs(bounds_.min[a]), std::abs(bounds_.max[a])) +
+                          1e-6f;
+        padded.min[a] -= pad;
+        padded.max[a] += pad;
+    }
+    for (int a = 0; a < 3; ++a) {
+        padded_min_[a] = padded.min[a];
+        padded_max_[a] = padded.max[a];
+    }
+}
+
+bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
+    // The three slabs of the padded box at once. Direction components below 1e-18 in
+    // magnitude become +-1e-18, as in the traversal, so that no slab distance is NaN for a
+    // finite ray; a ray with NaN anywhere goes on to the traversal.
+    const __m128 sign_bit = _mm_set1_ps(-0.0f);
+    const __m128 tiny = _mm_set1_ps(1e-18f);
+    __m128 dir = _mm_setr_ps(ray.dir_x, ray.dir_y, ray.dir_z, 1.0f);
+    const __m128 is_tiny = _mm_cmplt_ps(_mm_andnot_ps(sign_bit, dir), tiny);
+    dir = _mm_or_ps(_mm_and_ps(is_tiny, _mm_or_ps(_mm_and_ps(dir, sign_bit), tiny)),
+                    _mm_andnot_ps(is_tiny, dir));
+    const __m128 inverse = _mm_div_ps(_mm_set1_ps(1.0f), dir);
+    const __m128 org = _mm_setr_ps(ray.org_x, ray.org_y, ray.org_z, 0.0f);
+    const __m128 t0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_min_), org), inverse);
+    const __m128 t1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_max_), org), inverse);
+    if ((_mm_movemask_ps(_mm_cmpunord_ps(t0, t1)) & 7) != 0) return false;
+    alignas(16) float entry[4], exit[4];
+    _mm_store_ps(entry, _mm_min_ps(t0, t1));
+    _mm_store_ps(exit, _mm_max_ps(t0, t1));
+    const float first = std::max({entry[0], entry[1], entry[2], ray.tnear});
+    const float last = std::min({exit[0], exit[1], exit[2], ray.tfar});
+    // Each slab distance is within a few ulps of exact: a miss only by more than that.
+    return first - last > 1e-5f * (std::abs(first) + std::abs(last));
+}
+
 void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     const RTCRay& in = rayhit.ray;
     // Embree's inactive rays (tnear > tfar, or NaN bounds) and rays whose mask no geometry
     // shares are left untouched.
     if (!(in.tnear <= in.tfar)) return;
     if (is_ray_mask_supported_ && in.mask == 0) return;
+    if (misses_bounds(in)) return;
     const Ray ray = glue::from_embree_ray(in);
     const LocatedHit located = accel_->intersect_located(ray);
     const Hit& hit = located.hit;
@@ -179,6 +224,7 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
 void EmbreeAccel::occluded1(RTCRay& in) const noexcept {
     if (!(in.tnear <= in.tfar)) return;
     if (is_ray_mask_supported_ && in.mask == 0) return;
+    if (misses_bounds(in)) return;
     const Ray ray = glue::from_embree_ray(in);
     if (accel_->occluded(ray)) in.tfar = -std::numeric_limits<float>::infinity();
 }
@@ -219,6 +265,7 @@ EmbreeUpdateReport EmbreeAccel::update() {
     }
     std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
     bounds_ = next.scene.bounds();
+    pad_bounds();
     converted_ = std::move(next);
     accel_ = std::move(next_accel);
     embree_world_to_object_ = std::move(world_to_object);

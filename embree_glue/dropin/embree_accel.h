@@ -124,6 +124,9 @@ public:
 private:
     /// Conversion of the scene as the registry sees it now.
     glue::ConvertedEmbreeScene convert_now() const;
+    void pad_bounds();
+    /// True when `ray` certainly misses every triangle: it misses the padded scene bounds.
+    bool misses_bounds(const RTCRay& ray) const noexcept;
 
     RTCScene scene_ = nullptr;
     EmbreeAccelSettings settings_;
@@ -134,6 +137,10 @@ private:
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;
+    /// bounds_ with a margin (x, y, z, 0): rays that miss it return before the traversal
+    /// (most rays of a frame framing a whole scene miss every object).
+    alignas(16) float padded_min_[4] = {};
+    alignas(16) float padded_max_[4] = {};
     /// index = InstanceId: Embree's world-to-object map of the instance (its float inverse of
     /// the registered transform, rounded as Embree rounds it); unused for root-scene meshes.
     std::vector<AffineTransform> embree_world_to_object_;

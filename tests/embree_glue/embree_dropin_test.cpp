@@ -312,6 +312,73 @@ TEST(EmbreeAccel, UpdateAfterAttachingAndDisablingRebuildsAndMatchesEmbree) {
     expect_accel_matches_embree(embree_scene->top, accel, 6);
 }
 
+// Rays that miss the padded scene bounds return before the traversal: the rays that test that
+// early exit's edges. From far away (up to 1,000 diagonals) aimed at the centres of the scene's
+// triangles, which they must reach; starting just inside a face of the scene's box and
+// running parallel to it (zero direction components); with tiny direction components; and aimed
+// just past the box's corners.
+TEST(EmbreeAccel, RaysNearAndFarFromTheSceneBoundsMatchEmbree) {
+    Device app;
+    const Scene scene = make_default_scene();
+    const auto embree_scene = feed_to_embree(app.device, scene, /*flatten_every=*/7);
+    const EmbreeAccel accel(embree_scene->top);
+    const BBox3f bounds = accel.bounds();
+    const float diagonal = length(bounds.max - bounds.min);
+    Random random(11);
+    const auto random_unit = [&] {
+        const Vec3f v{random.next_float(-1, 1), random.next_float(-1, 1), random.next_float(-1, 1)};
+        return length(v) > 1e-3f ? v / length(v) : Vec3f{0, 0, 1};
+    };
+    const auto inside = [&] {
+        Vec3f p;
+        for (int a = 0; a < 3; ++a) p[a] = random.next_float(bounds.min[a], bounds.max[a]);
+        return p;
+    };
+    std::vector<Ray> rays;
+    for (int i = 0; i < 2000; ++i) {  // from far away at a triangle's centre
+        const Instance& instance = scene.instances[random.next_below(scene.instances.size())];
+        const Mesh& mesh = scene.meshes[instance.mesh_id];
+        const auto corners = mesh.corners(random.next_below(mesh.triangles.size()));
+        const Vec3f centre =
+            instance.object_to_world.transform_point((corners[0] + corners[1] + corners[2]) / 3.0f);
+        const Vec3f origin =
+            centre + random_unit() * (diagonal * std::exp2(random.next_float(0.0f, 10.0f)));
+        rays.push_back({origin, 0.0f, centre - origin, kInf});
+    }
+    for (int i = 0; i < 2000; ++i) {  // just inside a face of the box, parallel to it
+        const int axis = int(random.next_below(3));
+        Vec3f origin = inside();
+        const float inset = 1e-3f * (bounds.max[axis] - bounds.min[axis]);
+        origin[axis] =
+            random.next_below(2) == 0 ? bounds.min[axis] + inset : bounds.max[axis] - inset;
+        Vec3f dir = random_unit();
+        dir[axis] = 0.0f;
+        if (length(dir) == 0.0f) dir[(axis + 1) % 3] = 1.0f;
+        rays.push_back({origin, 0.0f, dir, kInf});
+    }
+    for (int i = 0; i < 2000; ++i) {  // tiny direction components, from outside the box
+        Vec3f dir = random_unit();
+        const int keep = int(random.next_below(3));  // one component keeps its size
+        for (int a = 0; a < 3; ++a)
+            if (a != keep && random.next_below(2) == 0) dir[a] = std::copysign(1e-20f, dir[a]);
+        const Vec3f target = inside();
+        rays.push_back({target - dir * (2.0f * diagonal / length(dir)), 0.0f, dir, kInf});
+    }
+    for (int i = 0; i < 2000; ++i) {  // just past a corner of the box
+        Vec3f corner;
+        for (int a = 0; a < 3; ++a)
+            corner[a] = random.next_below(2) == 0 ? bounds.min[a] : bounds.max[a];
+        const Vec3f past = corner + random_unit() * (diagonal * 1e-4f);
+        const Vec3f origin = past + random_unit() * diagonal;
+        rays.push_back({origin, 0.0f, past - origin, kInf});
+    }
+    const Answers embree = trace_embree(embree_scene->top, rays);
+    expect_same_as_embree(embree, trace_accel(accel, rays), bounds);
+    std::size_t far_hits = 0;
+    for (std::size_t i = 0; i < 2000; ++i) far_hits += is_hit(embree.hits[i]);
+    EXPECT_GT(far_hits, 1900u);  // the far rays do reach the scene
+}
+
 // ---- Ray conventions -----------------------------------------------------------------------
 
 TEST(EmbreeAccel, FollowsEmbreeRayConventions) {
