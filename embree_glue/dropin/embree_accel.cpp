@@ -146,28 +146,28 @@ void EmbreeAccel::pad_bounds() {
         padded_min_[a] = padded.min[a];
         padded_max_[a] = padded.max[a];
     }
+    padded_min_[3] = -std::numeric_limits<float>::infinity();
+    padded_max_[3] = std::numeric_limits<float>::infinity();
 }
 
 bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
-    // The three slabs of the padded box at once. Direction components below 1e-18 in
-    // magnitude become +-1e-18, as in the traversal, so that no slab distance is NaN for a
-    // finite ray; a ray with NaN anywhere goes on to the traversal.
-    const __m128 sign_bit = _mm_set1_ps(-0.0f);
-    const __m128 tiny = _mm_set1_ps(1e-18f);
-    __m128 dir = _mm_setr_ps(ray.dir_x, ray.dir_y, ray.dir_z, 1.0f);
-    const __m128 is_tiny = _mm_cmplt_ps(_mm_andnot_ps(sign_bit, dir), tiny);
-    dir = _mm_or_ps(_mm_and_ps(is_tiny, _mm_or_ps(_mm_and_ps(dir, sign_bit), tiny)),
-                    _mm_andnot_ps(is_tiny, dir));
-    const __m128 inverse = _mm_div_ps(_mm_set1_ps(1.0f), dir);
+    // The three slabs of the padded box at once. A zero direction component gives slab
+    // distances of +-inf, of the right signs when the origin is inside or outside the slab;
+    // NaN (an origin on a padded plane, or NaN in the ray) goes on to the traversal.
+    const __m128 inverse =
+        _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(ray.dir_x, ray.dir_y, ray.dir_z, 1.0f));
     const __m128 org = _mm_setr_ps(ray.org_x, ray.org_y, ray.org_z, 0.0f);
     const __m128 t0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_min_), org), inverse);
     const __m128 t1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_max_), org), inverse);
-    if ((_mm_movemask_ps(_mm_cmpunord_ps(t0, t1)) & 7) != 0) return false;
-    alignas(16) float entry[4], exit[4];
-    _mm_store_ps(entry, _mm_min_ps(t0, t1));
-    _mm_store_ps(exit, _mm_max_ps(t0, t1));
-    const float first = std::max({entry[0], entry[1], entry[2], ray.tnear});
-    const float last = std::min({exit[0], exit[1], exit[2], ray.tfar});
+    if (_mm_movemask_ps(_mm_cmpunord_ps(t0, t1)) != 0) return false;
+    // Lane 3 (origin 0, direction 1, planes -inf and +inf) takes no part.
+    __m128 entry = _mm_min_ps(t0, t1);
+    __m128 exit = _mm_max_ps(t0, t1);
+    entry = _mm_max_ps(entry, _mm_shuffle_ps(entry, entry, _MM_SHUFFLE(1, 0, 3, 2)));
+    exit = _mm_min_ps(exit, _mm_shuffle_ps(exit, exit, _MM_SHUFFLE(1, 0, 3, 2)));
+    entry = _mm_max_ss(_mm_max_ss(entry, _mm_shuffle_ps(entry, entry, 1)), _mm_set_ss(ray.tnear));
+    exit = _mm_min_ss(_mm_min_ss(exit, _mm_shuffle_ps(exit, exit, 1)), _mm_set_ss(ray.tfar));
+    const float first = _mm_cvtss_f32(entry), last = _mm_cvtss_f32(exit);
     // Each slab distance is within a few ulps of exact: a miss only by more than that.
     return first - last > 1e-5f * (std::abs(first) + std::abs(last));
 }
