@@ -52,15 +52,6 @@ RTCRay to_embree_ray(const Ray& ray) {
     return out;
 }
 
-Ray from_embree_ray(const RTCRay& ray) {
-    Ray out;
-    out.org = {ray.org_x, ray.org_y, ray.org_z};
-    out.dir = {ray.dir_x, ray.dir_y, ray.dir_z};
-    out.tnear = ray.tnear;
-    out.tfar = ray.tfar;
-    return out;
-}
-
 Hit embree_closest_hit(RTCScene scene, const Ray& ray, bool instance_id_is_inst_id) {
     RTCRayHit rayhit{};
     rayhit.ray = to_embree_ray(ray);

@@ -17,7 +17,14 @@ RTCBuildQuality to_embree_quality(EmbreeBuildQuality quality);
 RTCRay to_embree_ray(const Ray& ray);
 
 /// Embree's single ray as ours: origin, direction and the [tnear, tfar] interval.
-Ray from_embree_ray(const RTCRay& ray);
+inline Ray from_embree_ray(const RTCRay& ray) {  // inline: on every traced ray's path
+    Ray out;
+    out.org = {ray.org_x, ray.org_y, ray.org_z};
+    out.dir = {ray.dir_x, ray.dir_y, ray.dir_z};
+    out.tnear = ray.tnear;
+    out.tfar = ray.tfar;
+    return out;
+}
 
 /// Embree's closest hit of `ray` in `scene` (rtcIntersect1), a miss when nothing is hit; the
 /// hit's instance id is Embree's instID[0] when `instance_id_is_inst_id`, else its geomID

@@ -123,10 +123,6 @@ Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counter
     return kernels_->instanced_intersect(*this, ray, counters);
 }
 
-LocatedHit InstancedAccel::intersect_located(const Ray& ray) const {
-    return kernels_->instanced_intersect_located(*this, ray);
-}
-
 bool InstancedAccel::occluded(const Ray& ray) const {
     return kernels_->instanced_occluded(*this, ray);
 }

@@ -13,10 +13,9 @@
 #include "rebraid/top_level/instance_target.h"
 #include "rebraid/top_level/located_hit.h"
 #include "rebraid/top_level/top_level_bvh.h"
+#include "rebraid/top_level/trace_kernels.h"
 
 namespace rebraid {
-
-struct TraceKernels;
 
 /// A two-level structure: object BVHs per mesh plus a top level whose leaves reference
 /// (instance, object node) pairs. Serves both the plain two-level top and the re-braided one:
@@ -38,8 +37,11 @@ public:
     Hit intersect_counted(const Ray& ray, TraversalCounters* counters) const override;
     bool occluded(const Ray& ray) const override;
     AccelStats stats() const override;
-    /// The closest hit, as intersect(), and where its triangle's corners are kept.
-    LocatedHit intersect_located(const Ray& ray) const;
+    /// The closest hit, as intersect(), and where its triangle's corners are kept. Inline:
+    /// the Embree glue calls it for every ray.
+    LocatedHit intersect_located(const Ray& ray) const {
+        return kernels_->instanced_intersect_located(*this, ray);
+    }
 
     const TopLevelBvh& top_level() const { return top_; }
     const std::vector<ObjectBvh>& object_bvhs() const { return object_bvhs_; }
