@@ -40,19 +40,16 @@ command's result is one JSON file, SUITE/NAME.rROUND.json, holding the command (
 relative to the repository root), the commit, the machine, the date, the round and the parsed
 output. Collecting a suite first deletes that suite's earlier files in the output folder.
 
-Expected time on a 2-core machine (AMD EPYC, 24 GiB), from a --quick run (about 1.5 minutes),
-one full round of the default scene (15 s) and 2-frame animate runs, all while a compile job
-held about one core: one round takes about 1 min for `scenes`, 2 min for `generated` (mostly
-trees and powerplant) and 3 min for `animate` (20 frames of 640x360 primary and diffuse rays
-for 15 methods, 4 runs), half a minute for `forests` on an idle machine (mostly the
-million-instance forest), so the full default collection (all suites, 5 rounds) takes about
-30 minutes, and less on an idle machine. Run it on an otherwise idle
+Measured time on a 2-core machine (AMD Zen 5, 24 GiB), idle, 5 rounds: structures 13 s,
+scenes 1.8 min, generated 3.5 min (mostly trees and powerplant), forests 4.3 min (half of it
+tracing the million-instance forest), animate 11 min (20 frames of 640x360 primary and diffuse
+rays for 15 methods, 4 runs): 21 minutes for these five. Run it on an otherwise idle
 machine: the builds and the rays use every core. The `instructions` suite counts rather than
 times, so any machine load leaves its results as they are (it only runs longer): one round
 took 14 minutes on the shared machine (10 to 20 s for each shared scene, 1.3 min for the
 default scene, 5 min for trees and 4 min for powerplant, whose builds over millions of
-triangles valgrind emulates slowly), which brings the full default collection to about 45 minutes; its --quick part (the
-default scene) adds about 1.3 minutes.
+triangles valgrind emulates slowly), which brings the full default collection to about 35
+minutes; its --quick part (the default scene) adds about 1.3 minutes.
 """
 import argparse
 import datetime
