@@ -46,10 +46,10 @@ tracing the million-instance forest), animate 11 min (20 frames of 640x360 prima
 rays for 15 methods, 4 runs): 21 minutes for these five. Run it on an otherwise idle
 machine: the builds and the rays use every core. The `instructions` suite counts rather than
 times, so any machine load leaves its results as they are (it only runs longer): one round
-took 14 minutes on the shared machine (10 to 20 s for each shared scene, 1.3 min for the
-default scene, 5 min for trees and 4 min for powerplant, whose builds over millions of
-triangles valgrind emulates slowly), which brings the full default collection to about 35
-minutes; its --quick part (the default scene) adds about 1.3 minutes.
+took 9 minutes on the idle machine (14 on a shared one; most of it the builds of trees,
+powerplant and crown, whose millions of triangles valgrind emulates slowly), which brings the
+full default collection to about 30 minutes; its --quick part (the default scene) adds about
+1.3 minutes.
 """
 import argparse
 import datetime
