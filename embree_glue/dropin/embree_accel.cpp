@@ -133,12 +133,14 @@ glue::ConvertedEmbreeScene EmbreeAccel::convert_now() const {
 }
 
 void EmbreeAccel::pad_bounds() {
-    // A margin far above the rounding of hit points on the scene's triangles.
-    BBox3f padded = bounds_;
+    // The box of the top level's root: the traversal tests every ray against the boxes it
+    // holds first, so a ray that misses it by more than rounding finds no hit. The margin is
+    // far above the rounding of either test.
+    const BBox3f& box = accel_->top_level().bounds;
+    BBox3f padded = box;
     for (int a = 0; a < 3; ++a) {
-        const float pad = 1e-3f * (bounds_.max[a] - bounds_.min[a]) +
-                          1e-4f * std::max(std::abs(bounds_.min[a]), std::abs(bounds_.max[a])) +
-                          1e-6f;
+        const float pad = 1e-3f * (box.max[a] - box.min[a]) +
+                          1e-4f * std::max(std::abs(box.min[a]), std::abs(box.max[a])) + 1e-6f;
         padded.min[a] -= pad;
         padded.max[a] += pad;
     }
@@ -265,9 +267,9 @@ EmbreeUpdateReport EmbreeAccel::update() {
     }
     std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
     bounds_ = next.scene.bounds();
-    pad_bounds();
     converted_ = std::move(next);
     accel_ = std::move(next_accel);
+    pad_bounds();  // of the new top level
     embree_world_to_object_ = std::move(world_to_object);
     report.update_ms = timer.elapsed_ms();
     return report;

@@ -137,8 +137,9 @@ private:
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;
-    /// bounds_ with a margin (x, y, z, then -inf and +inf): rays that miss it return before the
-    /// traversal (most rays of a frame framing a whole scene miss every object).
+    /// The top level's box with a margin (x, y, z, then -inf and +inf): rays that miss it
+    /// return before the traversal (most rays of a frame framing a whole scene miss every
+    /// object).
     alignas(16) float padded_min_[4] = {};
     alignas(16) float padded_max_[4] = {};
     /// index = InstanceId: Embree's world-to-object map of the instance (its float inverse of
