@@ -2,7 +2,11 @@
 
 #include <tbb/parallel_for.h>
 
+#if defined(__x86_64__) || defined(_M_X64) || defined(__i386__)
 #include <immintrin.h>
+#define REBRAID_GLUE_SSE 1
+#endif
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -153,9 +157,10 @@ void EmbreeAccel::pad_bounds() {
 }
 
 bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
-    // The three slabs of the padded box at once. A zero direction component gives slab
-    // distances of +-inf, of the right signs when the origin is inside or outside the slab;
-    // NaN (an origin on a padded plane, or NaN in the ray) goes on to the traversal.
+    // The three slabs of the padded box. A zero direction component gives slab distances of
+    // +-inf, of the right signs when the origin is inside or outside the slab; NaN (an origin
+    // on a padded plane, or NaN in the ray) goes on to the traversal.
+#ifdef REBRAID_GLUE_SSE
     const __m128 inverse =
         _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(ray.dir_x, ray.dir_y, ray.dir_z, 1.0f));
     const __m128 org = _mm_setr_ps(ray.org_x, ray.org_y, ray.org_z, 0.0f);
@@ -170,6 +175,19 @@ bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
     entry = _mm_max_ss(_mm_max_ss(entry, _mm_shuffle_ps(entry, entry, 1)), _mm_set_ss(ray.tnear));
     exit = _mm_min_ss(_mm_min_ss(exit, _mm_shuffle_ps(exit, exit, 1)), _mm_set_ss(ray.tfar));
     const float first = _mm_cvtss_f32(entry), last = _mm_cvtss_f32(exit);
+#else
+    const float org[3] = {ray.org_x, ray.org_y, ray.org_z};
+    const float dir[3] = {ray.dir_x, ray.dir_y, ray.dir_z};
+    float first = ray.tnear, last = ray.tfar;
+    for (int a = 0; a < 3; ++a) {
+        const float inverse = 1.0f / dir[a];
+        const float t0 = (padded_min_[a] - org[a]) * inverse;
+        const float t1 = (padded_max_[a] - org[a]) * inverse;
+        if (std::isnan(t0) || std::isnan(t1)) return false;
+        first = std::max(first, std::min(t0, t1));
+        last = std::min(last, std::max(t0, t1));
+    }
+#endif
     // Each slab distance is within a few ulps of exact: a miss only by more than that.
     return first - last > 1e-5f * (std::abs(first) + std::abs(last));
 }
