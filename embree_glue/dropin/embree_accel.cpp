@@ -141,16 +141,11 @@ void EmbreeAccel::pad_bounds() {
     // holds first, so a ray that misses it by more than rounding finds no hit. The margin is
     // far above the rounding of either test.
     const BBox3f& box = accel_->top_level().bounds;
-    BBox3f padded = box;
     for (int a = 0; a < 3; ++a) {
         const float pad = 1e-3f * (box.max[a] - box.min[a]) +
                           1e-4f * std::max(std::abs(box.min[a]), std::abs(box.max[a])) + 1e-6f;
-        padded.min[a] -= pad;
-        padded.max[a] += pad;
-    }
-    for (int a = 0; a < 3; ++a) {
-        padded_min_[a] = padded.min[a];
-        padded_max_[a] = padded.max[a];
+        padded_min_[a] = box.min[a] - pad;
+        padded_max_[a] = box.max[a] + pad;
     }
     padded_min_[3] = -std::numeric_limits<float>::infinity();
     padded_max_[3] = std::numeric_limits<float>::infinity();

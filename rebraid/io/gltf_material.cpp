@@ -189,10 +189,8 @@ std::vector<std::vector<std::array<float, 2>>> read_gltf_base_colour_uvs(
                                                     std::to_string(range.gltf_primitive),
                                                 prefix);
                 if (!decoded.empty()) {
-                    if (decoded.size() != range.vertex_count)
-                        throw Error(prefix + role + " decodes " + std::to_string(decoded.size()) +
-                                    " points, the primitive has " +
-                                    std::to_string(range.vertex_count) + " positions");
+                    // One per decoded point, as many as the primitive's positions (the Draco
+                    // decoder checks both against the POSITION accessor's count).
                     if (uvs[m].empty())
                         uvs[m].assign(loaded.scene.meshes[m].positions.size(), {0, 0});
                     std::copy(decoded.begin(), decoded.end(),
