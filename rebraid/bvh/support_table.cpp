@@ -105,14 +105,51 @@ SupportTable::SupportBounds SupportTable::support_bounds(Vec3f direction) const 
     return {scale * upper, best_vertex};
 }
 
+float SupportTable::interpolated_upper(int face, float x, float y) const {
+    const int i = std::min(int(x), kCells - 1);
+    const int j = std::min(int(y), kCells - 1);
+    const float a = x - float(i), b = y - float(j);
+    // As support_bounds: the same corners, weights and sum, in the same order.
+    const bool is_lower = a >= b;
+    const float w0 = is_lower ? 1.0f - a : 1.0f - b;
+    const float w1 = is_lower ? a - b : b - a;
+    const float w2 = is_lower ? b : a;
+    const float v1 = values_[is_lower ? index(face, i + 1, j) : index(face, i, j + 1)];
+    float upper = 0.0f;
+    upper += w0 * values_[index(face, i, j)];
+    upper += w1 * v1;
+    upper += w2 * values_[index(face, i + 1, j + 1)];
+    return upper;
+}
+
+std::pair<float, float> SupportTable::upper_supports(Vec3f direction) const {
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+        if (std::fabs(direction[k]) > std::fabs(direction[axis])) axis = k;
+    const float scale = std::fabs(direction[axis]);
+    if (scale == 0.0f) return {0.0f, 0.0f};
+    // The faces of `direction` and of its negation are opposite; the scaled coordinates of
+    // the negation are the negated quotients (division is exact in sign), so both come from
+    // one pair of divisions with the arithmetic support_bounds uses for each.
+    const int face = 2 * axis + (direction[axis] < 0.0f ? 1 : 0);
+    const float u = direction[(axis + 1) % 3] / scale;
+    const float v = direction[(axis + 2) % 3] / scale;
+    constexpr float kHalfCells = 0.5f * kCells;
+    const float along = interpolated_upper(face, (u + 1.0f) * kHalfCells, (v + 1.0f) * kHalfCells);
+    const float against =
+        interpolated_upper(face ^ 1, (-u + 1.0f) * kHalfCells, (-v + 1.0f) * kHalfCells);
+    return {scale * along, scale * against};
+}
+
 BBox3f SupportTable::table_world_bounds(const AffineTransform& to_world) const {
     if (is_empty_) return BBox3f{};
     BBox3f box;
     for (int axis = 0; axis < 3; ++axis) {
         const Vec3f row{to_world.col_x[axis], to_world.col_y[axis], to_world.col_z[axis]};
         const float center = dot(row, center_) + to_world.translation[axis];
-        box.min[axis] = center - support_bounds(-row).upper;
-        box.max[axis] = center + support_bounds(row).upper;
+        const auto [along, against] = upper_supports(row);
+        box.min[axis] = center - against;
+        box.max[axis] = center + along;
     }
     // As world_bounds: the weights, the sums and the mapped centre round.
     return widen_for_mapping_rounding(box, to_world, object_magnitude_, 32.0f);

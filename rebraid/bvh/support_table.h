@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <utility>
 
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/wide_node.h"
@@ -61,6 +62,12 @@ private:
         Vec3f vertex;
     };
     SupportBounds support_bounds(Vec3f direction) const;
+    /// The upper bounds of support_bounds for `direction` and for its negation (the same
+    /// values, bit for bit), without the vertices: what table_world_bounds needs, for two
+    /// divisions instead of four.
+    std::pair<float, float> upper_supports(Vec3f direction) const;
+    /// The table's upper bound at the grid point (x, y) of `face`, x and y in [0, kCells].
+    float interpolated_upper(int face, float x, float y) const;
     static int index(int face, int i, int j) { return (face * kSide + i) * kSide + j; }
 
     bool is_empty_ = true;

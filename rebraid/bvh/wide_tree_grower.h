@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rebraid/bvh/wide_node.h"
+#include "rebraid/core/huge_pages.h"
 
 namespace rebraid {
 
@@ -26,37 +27,48 @@ struct GrownChunk {
     /// Per node: bit s set when child slot s refers into `links` rather than `nodes`.
     std::vector<std::uint8_t> linked_slots;
     std::vector<std::unique_ptr<GrownChunk>> links;
+    /// Per node: the nodes of its subtree, itself and linked chunks included (what placing
+    /// the subtrees side by side needs to number them without walking them first).
+    std::vector<std::uint32_t> subtree_nodes;
     /// Whether any node has late slots (else, without links, `nodes` is in final order).
     bool has_late_slots = false;
 };
 
 namespace growth_detail {
 
-inline std::size_t count_nodes(const GrownChunk& chunk) {
-    std::size_t count = chunk.nodes.size();
-    for (const auto& link : chunk.links) count += count_nodes(*link);
-    return count;
-}
-
-/// Appends the subtree of `local` to `out` in grow_wide_subtree's numbering: the node, then
-/// the subtrees of its smaller inner children in slot order, then those of its larger ones
-/// (which grow_wide_subtree built as tasks and appended last). Returns the node's id.
-inline std::uint32_t place(const GrownChunk& chunk, std::uint32_t local,
-                           std::vector<WideNode>& out) {
-    const auto id = std::uint32_t(out.size());
-    const WideNode& node = chunk.nodes[local];
-    out.push_back(node);
+/// Writes the subtree of `local` to out[id...] in grow_wide_subtree's numbering: the node,
+/// then the subtrees of its smaller inner children in slot order, then those of its larger
+/// ones (which grow_wide_subtree built as tasks and appended last). Each child's first id
+/// follows from its siblings' subtree sizes, so large subtrees are placed in parallel into
+/// their own ranges (subtrees of at least `task_nodes` nodes by tasks of their own); the
+/// result does not depend on the task split.
+inline void place(const GrownChunk& chunk, std::uint32_t local, std::uint32_t id, WideNode* out,
+                  std::uint32_t task_nodes) {
+    WideNode node = chunk.nodes[local];
     const std::uint32_t late = chunk.late_slots[local], linked = chunk.linked_slots[local];
+    std::uint32_t next = id + 1;
+    std::optional<tbb::task_group> tasks;
     for (std::uint32_t pass = 0; pass < 2; ++pass)
         for (int slot = 0; slot < kBvhWidth; ++slot) {
             const NodeRef ref = node.children[slot];
             if (!ref.is_inner() || ((late >> slot) & 1u) != pass) continue;
-            const std::uint32_t child = (linked >> slot) & 1u
-                                            ? place(*chunk.links[ref.node_id()], 0, out)
-                                            : place(chunk, ref.node_id(), out);
-            out[id].children[slot] = NodeRef::inner(child);
+            const bool is_linked = (linked >> slot) & 1u;
+            const GrownChunk& owner = is_linked ? *chunk.links[ref.node_id()] : chunk;
+            const std::uint32_t child_local = is_linked ? 0 : ref.node_id();
+            const std::uint32_t child_id = next;
+            next += owner.subtree_nodes[child_local];
+            node.children[slot] = NodeRef::inner(child_id);
+            if (owner.subtree_nodes[child_local] >= task_nodes) {
+                if (!tasks) tasks.emplace();
+                tasks->run([&owner, child_local, child_id, out, task_nodes] {
+                    place(owner, child_local, child_id, out, task_nodes);
+                });
+            } else {
+                place(owner, child_local, child_id, out, task_nodes);
+            }
         }
-    return id;
+    out[id] = node;
+    if (tasks) tasks->wait();
 }
 
 }  // namespace growth_detail
@@ -75,8 +87,15 @@ class WideTreeGrower {
                   std::is_trivially_destructible_v<Candidate>);
 
 public:
-    WideTreeGrower(const Policy& policy, std::size_t layout_threshold, std::size_t task_threshold)
-        : policy_(policy), layout_threshold_(layout_threshold), task_threshold_(task_threshold) {}
+    /// Subtrees of at least this many nodes are numbered into place by tasks of their own.
+    static constexpr std::uint32_t kPlaceTaskNodes = 4096;
+
+    WideTreeGrower(const Policy& policy, std::size_t layout_threshold, std::size_t task_threshold,
+                   std::uint32_t place_task_nodes = kPlaceTaskNodes)
+        : policy_(policy),
+          layout_threshold_(layout_threshold),
+          task_threshold_(task_threshold),
+          place_task_nodes_(place_task_nodes) {}
 
     NodeRef grow(const Candidate& root, std::vector<WideNode>& out) const {
         GrownChunk chunk;
@@ -87,8 +106,11 @@ public:
             out = std::move(chunk.nodes);  // built in its final order already
             return NodeRef::inner(0);
         }
-        out.reserve(growth_detail::count_nodes(chunk));
-        return NodeRef::inner(growth_detail::place(chunk, 0, out));
+        const std::uint32_t total = chunk.subtree_nodes[0];
+        reserve_on_huge_pages(out, total);
+        out.resize(total);
+        growth_detail::place(chunk, 0, 0, out.data(), place_task_nodes_);
+        return NodeRef::inner(0);
     }
 
 private:
@@ -135,6 +157,7 @@ private:
 
         const auto node_id = std::uint32_t(chunk.nodes.size());
         chunk.nodes.push_back(WideNode::make_empty());
+        chunk.subtree_nodes.push_back(0);  // counted once the children are built
         std::uint8_t late = 0, linked = 0;
         std::array<GrownChunk*, kBvhWidth> own_chunk{};
         std::array<std::uint32_t, kBvhWidth> link_index{};
@@ -178,12 +201,21 @@ private:
         }
         if (last_task >= 0) grow_into(kids[order[last_task]], depth + 1, *own_chunk[last_task]);
         if (tasks) tasks->wait();
+        std::uint32_t subtree = 1;
+        for (int i = 0; i < kid_count; ++i) {
+            const NodeRef child = chunk.nodes[node_id].children[i];
+            if (!child.is_inner()) continue;
+            subtree += own_chunk[i] ? own_chunk[i]->subtree_nodes[0]
+                                    : chunk.subtree_nodes[child.node_id()];
+        }
+        chunk.subtree_nodes[node_id] = subtree;
         return node_id;
     }
 
     const Policy& policy_;
     std::size_t layout_threshold_;
     std::size_t task_threshold_;
+    std::uint32_t place_task_nodes_;
 };
 
 }  // namespace rebraid

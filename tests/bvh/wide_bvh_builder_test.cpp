@@ -7,12 +7,15 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
 #include <numeric>
 #include <vector>
 
 #include "rebraid/bvh/binned_split.h"
+#include "rebraid/bvh/grow_wide_subtree.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/parallel_partition.h"
+#include "rebraid/bvh/wide_tree_grower.h"
 #include "rebraid/core/error.h"
 #include "rebraid/core/random.h"
 #include "rebraid/core/structure_hash.h"
@@ -213,6 +216,52 @@ std::vector<std::uint32_t> sorted_ids(std::span<const BuildPrim> prims) {
     for (const BuildPrim& prim : prims) ids.push_back(prim.id);
     std::sort(ids.begin(), ids.end());
     return ids;
+}
+
+/// A range of indices as WideTreeGrower and grow_wide_subtree see it, split a third of the
+/// way in (lopsided subtrees of every size), a leaf at three or fewer.
+struct IndexRange {
+    std::uint32_t begin = 0, end = 0;
+    bool is_leaf = false;
+    float area() const { return float(end - begin); }
+    BBox3f bounds() const { return {{float(begin), 0, 0}, {float(end), 1, 1}}; }
+    std::size_t size() const { return end - begin; }
+};
+
+struct IndexRangePolicy {
+    static IndexRange make(std::uint32_t begin, std::uint32_t end) {
+        return {begin, end, end - begin <= 3};
+    }
+    std::array<IndexRange, 2> split(const IndexRange& c, bool) const {
+        const std::uint32_t mid = c.begin + std::max<std::uint32_t>(1, (c.end - c.begin) / 3);
+        return {make(c.begin, mid), make(mid, c.end)};
+    }
+    NodeRef make_leaf(const IndexRange& c) const { return NodeRef::leaf(c.begin, c.end - c.begin); }
+};
+
+TEST(WideTreeGrower, NumbersNodesAsTheSerialRecursionForAnyTaskAndPlacementSplit) {
+    // The grower builds large subtrees as tasks into chunks and numbers them in one placement
+    // pass, itself split into tasks by subtree size: neither split may change a bit of the
+    // node array grow_wide_subtree makes on one thread.
+    tbb::global_control allow_four(tbb::global_control::max_allowed_parallelism, 4);
+    const IndexRangePolicy policy;
+    const IndexRange root = IndexRangePolicy::make(0, 20000);
+    constexpr std::size_t kLayoutThreshold = 500;
+    std::vector<WideNode> expected;
+    const NodeRef expected_root = grow_wide_subtree(policy, root, 0, kLayoutThreshold, expected);
+    ASSERT_EQ(expected_root, NodeRef::inner(0));
+    ASSERT_GT(expected.size(), 1000u);
+    for (const std::size_t task_threshold : {std::size_t(1) << 30, std::size_t(64), std::size_t(7)})
+        for (const std::uint32_t place_task_nodes : {1u << 30, 100u, 1u}) {
+            SCOPED_TRACE(testing::Message() << task_threshold << " " << place_task_nodes);
+            const WideTreeGrower<IndexRangePolicy, IndexRange> grower(
+                policy, kLayoutThreshold, task_threshold, place_task_nodes);
+            std::vector<WideNode> nodes;
+            EXPECT_EQ(grower.grow(root, nodes), expected_root);
+            ASSERT_EQ(nodes.size(), expected.size());
+            EXPECT_EQ(std::memcmp(nodes.data(), expected.data(), nodes.size() * sizeof(WideNode)),
+                      0);
+        }
 }
 
 TEST(BinnedSplit, PartitionsAgreeWithGoesLeftAndMeasureBothSides) {
