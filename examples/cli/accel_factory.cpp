@@ -204,6 +204,7 @@ const std::vector<VariantKey>& variant_keys() {
         {"estimate-levels", whole_number(&Settings::estimate_levels, 8)},
         {"estimate-max-brefs", whole_number(&Settings::estimate_max_brefs, 1u << 30)},
         {"estimate-give-up", whole_number(&Settings::estimate_give_up, 64)},
+        {"estimate-give-up-brefs", whole_number(&Settings::estimate_give_up_brefs, 1u << 30)},
         {"require-overlap",
          named_choice(&Settings::require_overlap,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},

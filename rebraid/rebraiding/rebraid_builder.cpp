@@ -177,11 +177,13 @@ private:
                                   segment.free_space(), settings_)
                      .lowers_sah()) {
                 // The subtree below may still open (its segments are smaller), unless the
-                // estimates have said no often enough in a row.
+                // estimates have said no often enough in a row, or once for many BRefs.
                 ++segment.failed_estimates;
-                if (settings_.estimate_give_up > 0 &&
-                    segment.failed_estimates >= settings_.estimate_give_up)
-                    segment.can_open = false;
+                const bool is_large = settings_.estimate_give_up_brefs > 0 &&
+                                      segment.size() >= settings_.estimate_give_up_brefs;
+                const bool said_no_often = settings_.estimate_give_up > 0 &&
+                                           segment.failed_estimates >= settings_.estimate_give_up;
+                if (is_large || said_no_often) segment.can_open = false;
                 return 0;
             }
             segment.failed_estimates = 0;

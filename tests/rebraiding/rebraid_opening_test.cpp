@@ -245,6 +245,7 @@ TEST(RebraidOpening, GivingUpAfterFailedEstimatesOnlyPrunesWhereEstimatesSaidNo)
         return build_rebraid(scene, bvhs,
                              {.opening_rule = OpeningRule::sah,
                               .estimate_give_up = failures,
+                              .estimate_give_up_brefs = 0,
                               .keep_cheaper_unopened = false});
     };
     auto hash_of = [&](RebraidBuild build) {
@@ -259,6 +260,29 @@ TEST(RebraidOpening, GivingUpAfterFailedEstimatesOnlyPrunesWhereEstimatesSaidNo)
     EXPECT_GT(at_once.opened, 0u);
     // More failures in a row than the tree is deep: the same tree as never giving up.
     EXPECT_EQ(hash_of(build_giving_up_after(64)), hash_of(never));
+}
+
+TEST(RebraidOpening, GivingUpAtOneNoForManyBRefsOnlyPrunesSegmentsThatLarge) {
+    const Scene scene = make_crossing_crown_scene();
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    auto build_with = [&](std::uint32_t failures, std::uint32_t large) {
+        return build_rebraid(scene, bvhs,
+                             {.opening_rule = OpeningRule::sah,
+                              .estimate_give_up = failures,
+                              .estimate_give_up_brefs = large,
+                              .keep_cheaper_unopened = false});
+    };
+    auto hash_of = [&](RebraidBuild build) {
+        return structure_hash_of(scene, bvhs, std::move(build.top));
+    };
+    const RebraidBuild never = build_with(0, 0);
+    ASSERT_GT(never.opened, 0u);
+    // Every segment counts as large: each no stops its subtree, as giving up at once does.
+    EXPECT_EQ(hash_of(build_with(0, 1)), hash_of(build_with(1, 0)));
+    EXPECT_LT(build_with(0, 1).opened, never.opened);
+    // Larger than every segment (80 instances and their budget of 320: at most 400 BRefs):
+    // the tree of never giving up.
+    EXPECT_EQ(hash_of(build_with(0, 401)), hash_of(never));
 }
 
 /// The SAH: every structure over the same instances divides by the same scene box (docs/design.md,
