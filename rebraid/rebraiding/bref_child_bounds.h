@@ -8,6 +8,7 @@
 
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/bbox.h"
+#include "rebraid/core/zeroed_buffer.h"
 #include "rebraid/rebraiding/bref.h"
 
 namespace rebraid {
@@ -23,13 +24,13 @@ public:
     using Boxes = std::array<BBox3f, kBvhWidth>;
 
     /// For target slots [0, slots).
-    explicit BRefChildBounds(std::size_t slots) : entry_of_slot_(slots, kNone) {}
+    explicit BRefChildBounds(std::size_t slots) : entry_of_slot_(slots) {}
 
     /// The boxes stored for `slot`'s BRef when they were computed for `target`, else null.
     const Boxes* find(std::uint32_t slot, const BRefTarget& target) const {
-        const std::uint32_t entry = entry_of_slot_[slot];
-        if (entry == kNone) return nullptr;
-        const Entry& e = entries_[entry];
+        const std::uint32_t entry_plus_one = entry_of_slot_[slot];
+        if (entry_plus_one == 0) return nullptr;
+        const Entry& e = entries_[entry_plus_one - 1];
         const bool is_same = e.target.instance_id == target.instance_id &&
                              e.target.object_node == target.object_node;
         return is_same ? &e.boxes : nullptr;
@@ -38,17 +39,18 @@ public:
     /// Stores `boxes` as those of `slot`'s BRef, now to `target`.
     const Boxes& store(std::uint32_t slot, const BRefTarget& target, const Boxes& boxes) {
         const auto it = entries_.push_back({target, boxes});
-        entry_of_slot_[slot] = std::uint32_t(it - entries_.begin());
+        entry_of_slot_[slot] = std::uint32_t(it - entries_.begin()) + 1;
         return it->boxes;
     }
 
 private:
-    static constexpr std::uint32_t kNone = ~std::uint32_t(0);
     struct Entry {
         BRefTarget target;
         Boxes boxes;
     };
-    std::vector<std::uint32_t> entry_of_slot_;
+    /// Per slot: 1 + the index of its entry, 0 for none (sized for every slot of the budget,
+    /// of which a build may touch few).
+    ZeroedBuffer<std::uint32_t> entry_of_slot_;
     tbb::concurrent_vector<Entry> entries_;
 };
 

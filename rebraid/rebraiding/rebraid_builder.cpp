@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <limits>
 #include <optional>
 #include <string>
@@ -22,6 +23,7 @@
 #include "rebraid/core/error.h"
 #include "rebraid/core/parallel_blocks.h"
 #include "rebraid/core/scratch_buffer.h"
+#include "rebraid/core/zeroed_buffer.h"
 #include "rebraid/rebraiding/bref.h"
 #include "rebraid/rebraiding/bref_budget.h"
 #include "rebraid/rebraiding/bref_opening.h"
@@ -291,30 +293,49 @@ RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> obje
 
 /// Leaves reference the BRef array with its unused free space in between; renumber them into
 /// a dense item list (in array order) and fill the top level's items.
-/// `item_slots` receives each item's target slot.
+/// `item_slots` receives each item's target slot. The used slots are marked in a bitmap (one
+/// bit per slot of the array, which the budget can make several times the items) and counted
+/// per 64-bit word, so the pass reads the items, not the free space.
 void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
-                std::span<const BRefTarget> targets, std::vector<std::uint32_t>& item_slots) {
-    std::vector<std::uint32_t> dense(prims.size() + 1, 0);
-    std::vector<char> used(prims.size(), 0);
+                std::span<const BRefTarget> targets, std::vector<std::uint32_t>& item_slots,
+                std::size_t parallel_threshold) {
+    const std::size_t words = (prims.size() + 63) / 64;
+    std::vector<std::uint64_t> used(words, 0);
     auto mark = [&](NodeRef ref) {
-        for (std::uint32_t i = 0; i < ref.prim_count(); ++i) used[ref.first_prim() + i] = 1;
+        for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i)
+            used[i >> 6] |= std::uint64_t(1) << (i & 63);
     };
     if (top.root.is_leaf()) mark(top.root);
     for (const WideNode& node : top.nodes)
         for (NodeRef ref : node.children)
             if (ref.is_leaf()) mark(ref);
-    for (std::size_t i = 0; i < prims.size(); ++i) dense[i + 1] = dense[i] + used[i];
-    top.items.resize(dense.back());
-    top.item_bounds.resize(dense.back());
-    item_slots.resize(dense.back());
-    for (std::size_t i = 0; i < prims.size(); ++i) {
-        if (!used[i]) continue;
-        item_slots[dense[i]] = prims[i].id;
-        top.items[dense[i]] = targets[prims[i].id];
-        top.item_bounds[dense[i]] = prims[i].bounds;
-    }
+    std::vector<std::uint32_t> word_start(words + 1, 0);
+    for (std::size_t w = 0; w < words; ++w)
+        word_start[w + 1] = word_start[w] + std::uint32_t(std::popcount(used[w]));
+    const std::uint32_t count = word_start[words];
+    top.items.resize(count);
+    top.item_bounds.resize(count);
+    item_slots.resize(count);
+    auto fill = [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t w = begin; w < end; ++w) {
+            std::uint32_t item = word_start[w];
+            for (std::uint64_t bits = used[w]; bits != 0; bits &= bits - 1, ++item) {
+                const BuildPrim& prim = prims[w * 64 + std::size_t(std::countr_zero(bits))];
+                item_slots[item] = prim.id;
+                top.items[item] = targets[prim.id];
+                top.item_bounds[item] = prim.bounds;
+            }
+        }
+    };
+    if (count < parallel_threshold)
+        fill(0, 0, words);
+    else
+        for_each_block(words, fill);
     auto renumber = [&](NodeRef ref) {
-        return NodeRef::leaf(dense[ref.first_prim()], ref.prim_count());
+        const std::uint32_t first = ref.first_prim();
+        const std::uint64_t below = used[first >> 6] & ((std::uint64_t(1) << (first & 63)) - 1);
+        return NodeRef::leaf(word_start[first >> 6] + std::uint32_t(std::popcount(below)),
+                             ref.prim_count());
     };
     if (top.root.is_leaf()) top.root = renumber(top.root);
     for (WideNode& node : top.nodes)
@@ -442,8 +463,11 @@ TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettin
     const ScratchBuffer<BRefTarget> target_buffer(capacity);
     const std::span<BuildPrim> prims = prim_buffer.span();
     const std::span<BRefTarget> targets = target_buffer.span();
-    std::vector<double> node_cost(is_tracking_cost ? capacity : 0);
-    std::vector<double> removed_cost(is_tracking_cost ? capacity : 0);
+    // Zero for every slot no BRef reaches (see ZeroedBuffer: untouched slots cost nothing).
+    const ZeroedBuffer<double> node_cost_buffer(is_tracking_cost ? capacity : 0);
+    const ZeroedBuffer<double> removed_cost_buffer(is_tracking_cost ? capacity : 0);
+    const std::span<double> node_cost = node_cost_buffer.span();
+    const std::span<double> removed_cost = removed_cost_buffer.span();
     BRefSource source{object_bvhs,
                       inputs.instance_mesh,
                       inputs.object_to_world,
@@ -499,7 +523,7 @@ TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettin
     // BRefs opened below a node after its box was written may reach past it by rounding.
     top.bounds.extend(fit_inner_boxes(top.nodes, top.root));
     std::vector<std::uint32_t> item_slots;
-    emit_items(top, prims, targets, item_slots);
+    emit_items(top, prims, targets, item_slots, settings.build.parallel_threshold);
     result.brefs = top.items.size();
     result.opened = policy.opened();
     TrackedBuild tracked{std::move(result), 0.0};
