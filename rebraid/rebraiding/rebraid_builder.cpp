@@ -350,8 +350,14 @@ struct TrackedBuild {
     double cost = 0.0;
 };
 
+/// Whether a build needs its cost: the budget search and the cost guard compare the costs of
+/// builds that opened something with others; a first build that opened nothing is compared
+/// with nothing, and at a million instances the sum over the budget's slots was a pass of
+/// its own.
+enum class CostNeed { none, if_opened, always };
+
 TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
-                                bool is_tracking_cost);
+                                CostNeed cost_need);
 
 /// The part of a top level's SAH cost (unnormalised) its own nodes and items make: the
 /// inner nodes' half areas and each item's box area, times its triangles for a leaf item.
@@ -384,7 +390,7 @@ TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSet
         // Both rules' budgets double, so `larger` doubles whichever of them it takes.
         larger.budget_factor *= 2.0f;
         larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref * 0.5f);
-        TrackedBuild candidate = build_rebraid_once(inputs, larger, true);
+        TrackedBuild candidate = build_rebraid_once(inputs, larger, CostNeed::always);
         // The caps (every primitive a BRef, max_budget) stop the budget from growing.
         if (candidate.build.budget <= last_budget) break;
         last_budget = candidate.build.budget;
@@ -424,7 +430,8 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
     const bool is_searching = settings.budget_doublings > 0;
     const RebraidInputs inputs =
         rebraid_inputs(scene, object_bvhs, instances, settings, is_guarded || is_searching);
-    TrackedBuild result = build_rebraid_once(inputs, settings, is_guarded || is_searching);
+    TrackedBuild result = build_rebraid_once(
+        inputs, settings, is_guarded || is_searching ? CostNeed::if_opened : CostNeed::none);
     if (is_searching) result = search_larger_budgets(inputs, settings, std::move(result));
     if (is_guarded && result.build.opened > 0) {
         // The opening rules estimate; the guard measures: the same instances without any
@@ -433,7 +440,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
         unopened.opening_rule = OpeningRule::extent;
         unopened.budget_rule = BudgetRule::per_instance;
         unopened.budget_factor = 0.0f;
-        TrackedBuild plain = build_rebraid_once(inputs, unopened, true);
+        TrackedBuild plain = build_rebraid_once(inputs, unopened, CostNeed::always);
         if (plain.cost <= result.cost) {
             plain.build.budget = result.build.budget;
             result = std::move(plain);
@@ -447,7 +454,8 @@ namespace {
 
 /// One top-level build; build_rebraid has checked the inputs.
 TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
-                                bool is_tracking_cost) {
+                                CostNeed cost_need) {
+    const bool is_tracking_cost = cost_need != CostNeed::none;
     const std::span<const ObjectBvh> object_bvhs = inputs.object_bvhs;
     const auto n = std::uint32_t(inputs.seeded.size());
 
@@ -527,7 +535,8 @@ TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettin
     result.brefs = top.items.size();
     result.opened = policy.opened();
     TrackedBuild tracked{std::move(result), 0.0};
-    if (is_tracking_cost)
+    if (cost_need == CostNeed::always ||
+        (cost_need == CostNeed::if_opened && tracked.build.opened > 0))
         tracked.cost = cost_above_objects(tracked.build.top, item_slots, node_cost, removed_cost);
     return tracked;
 }
