@@ -14,6 +14,7 @@
 
 #include "accel_factory.h"
 #include "commands.h"
+#include "rebraid/core/build_timer.h"
 #include "scene_source.h"
 #include "stats_json.h"
 #include "status_line.h"
@@ -77,7 +78,9 @@ void run_stats(const StatsOptions& options) {
     check_scene_file(options.scene_path);
     StatusLine status;
     status.show("stats: loading " + describe_scene(options.scene_path));
+    const BuildTimer load_timer;
     const Scene scene = load_scene(options.scene_path);
+    const double load_ms = load_timer.elapsed_ms();
     status.show("stats: building " + options.accel_name);
     const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);
     const AccelStats stats = accel->stats();
@@ -88,12 +91,15 @@ void run_stats(const StatsOptions& options) {
         json["accel"] = options.accel_name;
         if (variant.entry->has_object_bvhs)
             json["object_builder"] = object_builder_name(variant.options.object_builder);
+        json["load_ms"] = load_ms;
         json.update(stats_to_json(stats));
         json["peak_rss_bytes"] = peak_rss_bytes();
         std::cout << json.dump(2) << "\n";
     } else {
         print_stats_text(std::cout, describe_scene(options.scene_path), options.accel_name, stats);
-        std::cout << std::left << std::setw(16) << "peak_rss_bytes" << peak_rss_bytes() << "\n";
+        std::cout << std::left << std::setw(16) << "load_ms" << std::fixed << std::setprecision(3)
+                  << load_ms << "\n"
+                  << std::setw(16) << "peak_rss_bytes" << peak_rss_bytes() << "\n";
         if (!stats.sah)
             std::cout << "(no sah, nodes or leaves: " << options.accel_name
                       << " is Embree's own BVH, which Embree does not let others inspect)\n";
@@ -116,7 +122,8 @@ void add_stats_command(CLI::App& app, CommonOptions& common, CommandAction& acti
     add_accel_build_options(*command, options->accel_options);
     command->add_flag("--json", options->is_json,
                       "print one JSON object (keys as the AccelStats fields, plus scene, "
-                      "accel and peak_rss_bytes: the process's peak resident memory)");
+                      "accel, load_ms: the time reading the scene file took, and "
+                      "peak_rss_bytes: the process's peak resident memory)");
     add_common_options(*command, common);
     command->callback([options, &action] { action = [options] { run_stats(*options); }; });
 }
