@@ -99,7 +99,7 @@ public:
 
     NodeRef grow(const Candidate& root, std::vector<WideNode>& out) const {
         GrownChunk chunk;
-        chunk.nodes.reserve(expected_nodes(root.size()));
+        reserve_on_huge_pages(chunk.nodes, expected_nodes(root.size()));
         grow_into(root, 0, chunk);
         out.clear();
         if (chunk.links.empty() && !chunk.has_late_slots) {
@@ -170,7 +170,7 @@ private:
             link_index[i] = std::uint32_t(chunk.links.size());
             chunk.links.push_back(std::make_unique<GrownChunk>());
             own_chunk[i] = chunk.links.back().get();
-            own_chunk[i]->nodes.reserve(expected_nodes(kid.size()));
+            reserve_on_huge_pages(own_chunk[i]->nodes, expected_nodes(kid.size()));
             linked |= std::uint8_t(1u << i);
             last_task = i;
         }

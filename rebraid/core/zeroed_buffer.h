@@ -6,6 +6,8 @@
 #include <span>
 #include <type_traits>
 
+#include "rebraid/core/huge_pages.h"
+
 namespace rebraid {
 
 /// Storage for `count` elements of a trivially copyable T whose bytes all start at zero,
@@ -22,6 +24,7 @@ public:
         if (count_ == 0) return;
         data_ = static_cast<T*>(std::calloc(count_, sizeof(T)));
         if (data_ == nullptr) throw std::bad_alloc();
+        advise_huge_pages(data_, count_ * sizeof(T));
     }
     ~ZeroedBuffer() { std::free(data_); }
     ZeroedBuffer(const ZeroedBuffer&) = delete;

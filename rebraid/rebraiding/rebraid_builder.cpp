@@ -21,6 +21,7 @@
 #include "rebraid/bvh/wide_tree_grower.h"
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/error.h"
+#include "rebraid/core/huge_pages.h"
 #include "rebraid/core/parallel_blocks.h"
 #include "rebraid/core/scratch_buffer.h"
 #include "rebraid/core/zeroed_buffer.h"
@@ -313,6 +314,9 @@ void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
     for (std::size_t w = 0; w < words; ++w)
         word_start[w + 1] = word_start[w] + std::uint32_t(std::popcount(used[w]));
     const std::uint32_t count = word_start[words];
+    reserve_on_huge_pages(top.items, count);
+    reserve_on_huge_pages(top.item_bounds, count);
+    reserve_on_huge_pages(item_slots, count);
     top.items.resize(count);
     top.item_bounds.resize(count);
     item_slots.resize(count);
