@@ -7,6 +7,7 @@
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/object_subtree_counts.h"
 #include "rebraid/core/bbox.h"
+#include "rebraid/core/scene.h"
 #include "rebraid/core/transform.h"
 #include "rebraid/rebraiding/bref.h"
 #include "rebraid/rebraiding/bref_bounds.h"
@@ -16,9 +17,8 @@ namespace rebraid {
 
 /// The object BVHs BRefs point into, where each instance places its mesh, and how BRefs open.
 struct BRefSource {
-    std::span<const ObjectBvh> object_bvhs;            ///< index = MeshId
-    std::span<const std::uint32_t> instance_mesh;      ///< index = InstanceId
-    std::span<const AffineTransform> object_to_world;  ///< index = InstanceId
+    std::span<const ObjectBvh> object_bvhs;  ///< index = MeshId
+    std::span<const Instance> instances;     ///< the scene's; index = InstanceId
     BRefBoundsRule bounds_rule = BRefBoundsRule::transformed_box;
     /// Triangles below each object node (object_subtree_counts.h), counted per mesh when
     /// first needed. Null: children get the paper's estimate, parent count / number of
@@ -37,14 +37,18 @@ struct BRefSource {
     BRefChildBounds* child_bounds = nullptr;
 
     const ObjectBvh& bvh_of(const BRefTarget& target) const {
-        return object_bvhs[instance_mesh[target.instance_id]];
+        return object_bvhs[instances[target.instance_id].mesh_id];
+    }
+    const AffineTransform& object_to_world(InstanceId instance) const {
+        return instances[instance].object_to_world;
     }
     /// The world box of a BRef to `node` (whose object box is `node_box`) of the instance of
     /// `target`, by the bounds rule.
     BBox3f world_bounds(const BRefTarget& target, NodeRef node, const BBox3f& node_box) const {
-        const std::uint32_t mesh = instance_mesh[target.instance_id];
-        return bref_world_bounds(object_bvhs[mesh], node, node_box,
-                                 object_to_world[target.instance_id], bounds_rule,
+        const Instance& instance = instances[target.instance_id];
+        const MeshId mesh = instance.mesh_id;
+        return bref_world_bounds(object_bvhs[mesh], node, node_box, instance.object_to_world,
+                                 bounds_rule,
                                  support_tables.empty() ? nullptr : &support_tables[mesh]);
     }
     bool has_exact_counts() const { return subtree_counts != nullptr; }
@@ -117,7 +121,7 @@ void for_each_bref_child_bounds(const BRefSource& source, std::uint32_t slot,
 /// (precondition: has_exact_counts()).
 inline std::uint32_t exact_prim_count(const BRefSource& source, const BRefTarget& target,
                                       NodeRef node) {
-    return source.subtree_counts->prim_count(source.instance_mesh[target.instance_id], node);
+    return source.subtree_counts->prim_count(source.instances[target.instance_id].mesh_id, node);
 }
 
 }  // namespace rebraid

@@ -54,7 +54,7 @@ void open_one(std::uint32_t parent_index, std::uint64_t offset, std::uint32_t ex
               const BRefSource& source) {
     BuildPrim& parent = prims[parent_index];
     const BRefTarget parent_target = targets[parent.id];
-    const AffineTransform& to_world = source.object_to_world[parent_target.instance_id];
+    const AffineTransform& to_world = source.object_to_world(parent_target.instance_id);
     const std::uint32_t estimated_weight = std::max(1u, parent.weight / (extra + 1));
     if (source.is_tracking_costs()) {
         // Slot parent.id only ever belongs to one segment at a time: no race.

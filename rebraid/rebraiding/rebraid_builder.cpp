@@ -234,8 +234,7 @@ std::vector<ObjectSupportTables> object_support_tables(const Scene& scene,
 /// build without opening costs.
 struct RebraidInputs {
     std::span<const ObjectBvh> object_bvhs;
-    std::vector<std::uint32_t> instance_mesh;         ///< index = InstanceId
-    std::vector<AffineTransform> object_to_world;     ///< index = InstanceId
+    std::span<const Instance> instances;              ///< the scene's; index = InstanceId
     std::vector<ObjectSupportTables> support_tables;  ///< see object_support_tables
     /// One seed BRef per instance of a non-empty mesh, at its object root (§3.2), in the
     /// order of the instances asked for: its instance, world box and, when costs are
@@ -251,14 +250,10 @@ RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> obje
                              bool is_tracking_cost) {
     RebraidInputs inputs;
     inputs.object_bvhs = object_bvhs;
-    inputs.instance_mesh.resize(scene.instances.size());
-    inputs.object_to_world.resize(scene.instances.size());
-    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
-        inputs.instance_mesh[i] = scene.instances[i].mesh_id;
-        inputs.object_to_world[i] = scene.instances[i].object_to_world;
-    }
+    inputs.instances = scene.instances;
+    reserve_on_huge_pages(inputs.seeded, instances.size());
     for (const InstanceId i : instances) {
-        const ObjectBvh& bvh = object_bvhs[inputs.instance_mesh[i]];
+        const ObjectBvh& bvh = object_bvhs[scene.instances[i].mesh_id];
         if (bvh.root.is_empty()) continue;
         inputs.seeded.push_back(i);
         inputs.primitive_count += bvh.prim_count();
@@ -269,14 +264,18 @@ RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> obje
                     " instances exceed the limit of " + std::to_string(limit));
     inputs.support_tables = object_support_tables(scene, object_bvhs, instances, settings);
     const std::size_t n = inputs.seeded.size();
+    reserve_on_huge_pages(inputs.seed_bounds, n);
     inputs.seed_bounds.resize(n);
-    if (is_tracking_cost) inputs.seed_cost.resize(n);
+    if (is_tracking_cost) {
+        reserve_on_huge_pages(inputs.seed_cost, n);
+        inputs.seed_cost.resize(n);
+    }
     auto seed = [&](std::size_t, std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
             const InstanceId i = inputs.seeded[k];
-            const std::uint32_t mesh = inputs.instance_mesh[i];
+            const std::uint32_t mesh = scene.instances[i].mesh_id;
             const ObjectBvh& bvh = object_bvhs[mesh];
-            const AffineTransform& to_world = inputs.object_to_world[i];
+            const AffineTransform& to_world = scene.instances[i].object_to_world;
             inputs.seed_bounds[k] = bref_world_bounds(
                 bvh, bvh.root, bvh.bounds, to_world, settings.bounds_rule,
                 inputs.support_tables.empty() ? nullptr : &inputs.support_tables[mesh]);
@@ -480,20 +479,14 @@ TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettin
     const ZeroedBuffer<double> removed_cost_buffer(is_tracking_cost ? capacity : 0);
     const std::span<double> node_cost = node_cost_buffer.span();
     const std::span<double> removed_cost = removed_cost_buffer.span();
-    BRefSource source{object_bvhs,
-                      inputs.instance_mesh,
-                      inputs.object_to_world,
-                      settings.bounds_rule,
-                      nullptr,
-                      settings.open_leaves,
-                      node_cost,
-                      removed_cost,
-                      inputs.support_tables};
+    BRefSource source{object_bvhs,  inputs.instances,     settings.bounds_rule,
+                      nullptr,      settings.open_leaves, node_cost,
+                      removed_cost, inputs.support_tables};
     // One BRef per instance at its object root, with the root's primitive count (§3.2).
     auto seed = [&](std::size_t, std::size_t begin, std::size_t end) {
         for (std::size_t slot = begin; slot < end; ++slot) {
             const InstanceId i = inputs.seeded[slot];
-            const ObjectBvh& bvh = object_bvhs[inputs.instance_mesh[i]];
+            const ObjectBvh& bvh = object_bvhs[inputs.instances[i].mesh_id];
             targets[slot] = {i, bvh.root};
             prims[slot] = {inputs.seed_bounds[slot], std::uint32_t(slot), bvh.prim_count()};
             if (is_tracking_cost) node_cost[slot] = inputs.seed_cost[slot];

@@ -141,7 +141,7 @@ OpeningEstimate estimate_opening(std::span<const BuildPrim> prims, const RangeIn
             } else {
                 offset += extra;
                 ++estimate.opened;
-                const AffineTransform& to_world = source.object_to_world[target.instance_id];
+                const AffineTransform& to_world = source.object_to_world(target.instance_id);
                 const NodeRef node = target.object_node;
                 const double area = prim.bounds.half_area();
                 closed_items +=
