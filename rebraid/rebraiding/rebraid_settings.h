@@ -126,10 +126,10 @@ struct RebraidSettings {
     /// OpeningRule::sah and overlap: a segment of at least this many BRefs whose estimate says
     /// no stops its subtree's opening at once (0: only estimate_give_up stops it). A no from
     /// many BRefs is a no for the segments inside it with few exceptions, while estimating
-    /// each of them again is most of a large build: on trees at 100,000 instances every
+    /// each of them again is most of a large build: on trees at 100,000 instances nearly every
     /// estimate says no and this cut the top build from 544 to 211 ms at the same SAH. 256
-    /// changed no tree of fewer than 256 instances, and every other measured SAH by at most
-    /// 0.4 % (docs/design.md).
+    /// changed no tree of the default scene or the shared scenes, and the generated scenes'
+    /// SAH by at most 0.4 % (powerplant; docs/design.md).
     std::uint32_t estimate_give_up_brefs = 256;
     /// OpeningRule::sah and overlap: before estimating, a segment checks that boxes of two
     /// of its instances overlap (cross_instance_overlap.h); where none do, neither it nor any
