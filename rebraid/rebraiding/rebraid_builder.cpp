@@ -353,11 +353,11 @@ struct TrackedBuild {
     double cost = 0.0;
 };
 
-/// Whether a build needs its cost: the budget search and the cost guard compare the costs of
-/// builds that opened something with others; a first build that opened nothing is compared
-/// with nothing, and at a million instances the sum over the budget's slots was a pass of
-/// its own.
-enum class CostNeed { none, if_opened, always };
+/// Whether a build needs its cost. The cost guard compares a build that opened something;
+/// the budget search compares one that filled its budget, which without opening only a
+/// budget of 0 does. A first build that did neither is compared with nothing, and at a
+/// million instances the sum over the budget's slots was a pass of its own.
+enum class CostNeed { none, if_compared, always };
 
 TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
                                 CostNeed cost_need);
@@ -434,7 +434,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
     const RebraidInputs inputs =
         rebraid_inputs(scene, object_bvhs, instances, settings, is_guarded || is_searching);
     TrackedBuild result = build_rebraid_once(
-        inputs, settings, is_guarded || is_searching ? CostNeed::if_opened : CostNeed::none);
+        inputs, settings, is_guarded || is_searching ? CostNeed::if_compared : CostNeed::none);
     if (is_searching) result = search_larger_budgets(inputs, settings, std::move(result));
     if (is_guarded && result.build.opened > 0) {
         // The opening rules estimate; the guard measures: the same instances without any
@@ -532,8 +532,8 @@ TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettin
     result.brefs = top.items.size();
     result.opened = policy.opened();
     TrackedBuild tracked{std::move(result), 0.0};
-    if (cost_need == CostNeed::always ||
-        (cost_need == CostNeed::if_opened && tracked.build.opened > 0))
+    const bool may_be_compared = tracked.build.opened > 0 || tracked.build.budget == 0;
+    if (cost_need == CostNeed::always || (cost_need == CostNeed::if_compared && may_be_compared))
         tracked.cost = cost_above_objects(tracked.build.top, item_slots, node_cost, removed_cost);
     return tracked;
 }
