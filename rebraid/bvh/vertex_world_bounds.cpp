@@ -2,12 +2,19 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <utility>
 
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
+
 namespace rebraid {
 namespace {
+
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 /// d · p with the products summed in the order AffineTransform::transform_vector uses.
 float project(Vec3f d, Vec3f p) {
@@ -37,9 +44,44 @@ struct Support {
     }
 };
 
+/// The bounds of `node`'s children along `d` (box_bound of each used slot; -infinity for
+/// unused ones) into `bounds`. Reads the node's planes by the sign of each component, so a
+/// slot costs three multiply-adds and no branch.
+void child_bounds_along(const WideNode& node, Vec3f d, int count, float* bounds) {
+    const float* bx = d.x > 0.0f ? node.upper_x : node.lower_x;
+    const float* by = d.y > 0.0f ? node.upper_y : node.lower_y;
+    const float* bz = d.z > 0.0f ? node.upper_z : node.lower_z;
+#ifdef __AVX2__
+    // The products summed as the compiler contracts box_bound's under -mfma, so that both
+    // give the same bits.
+    const __m256 sum =
+        _mm256_fmadd_ps(_mm256_set1_ps(d.z), _mm256_load_ps(bz),
+                        _mm256_fmadd_ps(_mm256_set1_ps(d.x), _mm256_load_ps(bx),
+                                        _mm256_mul_ps(_mm256_set1_ps(d.y), _mm256_load_ps(by))));
+    // Unused slots hold infinities (and 0 * inf is NaN): they become -infinity.
+    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256 used = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(count), lanes));
+    _mm256_store_ps(bounds, _mm256_blendv_ps(_mm256_set1_ps(-kInfinity), sum, used));
+#else
+    for (int c = 0; c < kBvhWidth; ++c)
+        bounds[c] = c < count ? (d.x * bx[c] + d.y * by[c]) + d.z * bz[c] : -kInfinity;
+#endif
+}
+
+/// The slot of the largest of `bounds` among the slots set in `live` (not empty).
+int largest_live(const float* bounds, unsigned live) {
+    int best = std::countr_zero(live);
+    for (unsigned rest = live & (live - 1); rest != 0; rest &= rest - 1) {
+        const int c = std::countr_zero(rest);
+        if (bounds[c] > bounds[best]) best = c;
+    }
+    return best;
+}
+
 /// Raises `support` over the vertices of the triangles under `ref` along `d`, skipping
-/// subtrees that cannot beat it by more than `slack`. Recursion depth is the object BVH's
-/// depth; no allocation.
+/// subtrees that cannot beat it by more than `slack`. Children are taken in the order of
+/// their bounds, largest first: its vertices raise the best early and prune the siblings.
+/// Recursion depth is the object BVH's depth; no allocation.
 void raise_support(const ObjectBvh& bvh, NodeRef ref, Vec3f d, float slack, Support& support) {
     if (ref.is_empty()) return;
     if (ref.is_leaf()) {
@@ -53,21 +95,19 @@ void raise_support(const ObjectBvh& bvh, NodeRef ref, Vec3f d, float slack, Supp
         return;
     }
     const WideNode& node = bvh.nodes[ref.node_id()];
-    std::array<std::pair<float, int>, kBvhWidth> order;
-    int count = 0;
-    for (int c = 0; c < kBvhWidth && !node.children[c].is_empty(); ++c)
-        order[count++] = {box_bound(node.child_bounds(c), d), c};
-    // Most promising child first: its vertices raise the best early and prune its siblings.
-    std::sort(order.begin(), order.begin() + count,
-              [](const auto& a, const auto& b) { return a.first > b.first; });
-    for (int i = 0; i < count; ++i) {
-        const float bound = order[i].first;
-        if (bound <= support.best) break;  // sorted: no later child can beat it either
+    const int count = node.child_count();
+    alignas(32) float bounds[kBvhWidth];
+    child_bounds_along(node, d, count, bounds);
+    for (unsigned live = (1u << count) - 1; live != 0;) {
+        const int c = largest_live(bounds, live);
+        live &= ~(1u << c);
+        const float bound = bounds[c];
+        if (bound <= support.best) break;  // the largest left: no other child can beat it
         if (bound <= support.best + slack) {
             support.skipped = std::max(support.skipped, bound);
             continue;
         }
-        raise_support(bvh, node.children[order[i].second], d, slack, support);
+        raise_support(bvh, node.children[c], d, slack, support);
     }
 }
 
