@@ -28,6 +28,18 @@ struct AffineTransform {
         return rebraid::is_finite(col_x) && rebraid::is_finite(col_y) &&
                rebraid::is_finite(col_z) && rebraid::is_finite(translation);
     }
+    /// True when each world axis is a multiple of at most one object axis (scales, mirrors,
+    /// axis permutations and translations): the map then takes a box's faces to faces, and
+    /// the transformed box of the tight box of some points is the tight box of the mapped
+    /// points.
+    bool maps_boxes_to_boxes() const {
+        for (int axis = 0; axis < 3; ++axis) {
+            const int terms =
+                int(col_x[axis] != 0.0f) + int(col_y[axis] != 0.0f) + int(col_z[axis] != 0.0f);
+            if (terms > 1) return false;
+        }
+        return true;
+    }
     /// Inverse map; the caller checks invertibility (determinant far from 0) first.
     AffineTransform inverse() const;
     /// The smallest AABB holding the transformed box (conservative: the box of the image of

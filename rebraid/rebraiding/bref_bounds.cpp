@@ -35,8 +35,10 @@ BBox3f transformed_leaf_bounds(const ObjectBvh& bvh, NodeRef leaf,
 BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_box,
                          const AffineTransform& to_world, BRefBoundsRule rule,
                          const ObjectSupportTables* tables) {
+    // Under a map that takes boxes to boxes, the node's box (the tight box of its triangles)
+    // maps to the box of its mapped vertices: every rule gives it, without a search.
     if (rule == BRefBoundsRule::transformed_box || node.is_empty() ||
-        to_world == AffineTransform::identity())
+        to_world.maps_boxes_to_boxes())
         return to_world.transform_bbox_conservative(node_box);
     if (node.is_leaf()) return transformed_leaf_bounds(bvh, node, to_world);
     if (rule == BRefBoundsRule::transformed_vertices) {

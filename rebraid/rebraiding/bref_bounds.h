@@ -22,7 +22,9 @@ enum class BRefBoundsRule {
     transformed_children,
     /// Tight: the box of the node's transformed vertices to within 1 % of its extent
     /// (vertex_world_bounds.h), found by branch and bound over the object BVH in a few
-    /// root-to-leaf paths per face.
+    /// root-to-leaf paths per face. Under a transform that takes boxes to boxes
+    /// (AffineTransform::maps_boxes_to_boxes) the transformed node box is that box already,
+    /// and no search is made.
     transformed_vertices,
 };
 

@@ -41,6 +41,21 @@ TEST(AffineTransform, TransformedBoxHoldsEveryTransformedCorner) {
     expect_near(out.max, corners.max, 1e-4f);
 }
 
+TEST(AffineTransform, MapsBoxesToBoxesOnlyWhenEachAxisGoesToOneAxis) {
+    // Scales, mirrors, axis permutations (a quarter turn written with exact zeros) and
+    // translations keep a box a box.
+    EXPECT_TRUE(AffineTransform::identity().maps_boxes_to_boxes());
+    EXPECT_TRUE((AffineTransform::translate({4, -1, 2}) * AffineTransform::scale({2, -3, 0.5f}))
+                    .maps_boxes_to_boxes());
+    const AffineTransform quarter_turn{{0, 1, 0}, {-1, 0, 0}, {0, 0, 1}, {7, 0, 0}};
+    EXPECT_TRUE(quarter_turn.maps_boxes_to_boxes());
+    // Any mixing of two axes into one does not: a rotation, a shear, a rounded quarter turn.
+    EXPECT_FALSE(AffineTransform::rotate({0, 0, 1}, 0.3f).maps_boxes_to_boxes());
+    const AffineTransform shear{{1, 0, 0}, {0.5f, 1, 0}, {0, 0, 1}, {0, 0, 0}};
+    EXPECT_FALSE(shear.maps_boxes_to_boxes());
+    EXPECT_FALSE(AffineTransform::rotate({0, 0, 1}, 1.5707963f).maps_boxes_to_boxes());
+}
+
 TEST(AffineTransform, EmptyBoxStaysEmpty) {
     EXPECT_TRUE(AffineTransform::scale({2, 2, 2}).transform_bbox(BBox3f{}).is_empty());
 }

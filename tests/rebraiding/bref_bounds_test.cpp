@@ -59,5 +59,26 @@ TEST(BRefBounds, IdentityTransformGivesTheNodeBox) {
                   bvh.bounds);
 }
 
+TEST(BRefBounds, VertexRuleUnderABoxPreservingMapIsTheTransformedBox) {
+    // A mirror, an axis permutation and a scale: the transformed node box is the box of the
+    // mapped vertices, which the vertex rule then gives without a search.
+    const ObjectBvh bvh = build_object_bvh(make_torus_knot());
+    const AffineTransform to_world{{0, 0, -2}, {3, 0, 0}, {0, 0.5f, 0}, {5, -2, 1}};
+    ASSERT_TRUE(to_world.maps_boxes_to_boxes());
+    std::vector<std::pair<NodeRef, BBox3f>> nodes;
+    collect(bvh, bvh.root, bvh.bounds, nodes);
+    ASSERT_GT(nodes.size(), 20u);
+    for (const auto& [ref, box] : nodes) {
+        const BBox3f exact = test::placed_vertex_bounds(bvh, ref, to_world);
+        const BBox3f vertices =
+            bref_world_bounds(bvh, ref, box, to_world, BRefBoundsRule::transformed_vertices);
+        EXPECT_EQ(vertices,
+                  bref_world_bounds(bvh, ref, box, to_world, BRefBoundsRule::transformed_box));
+        EXPECT_TRUE(merge(vertices, exact) == vertices);  // holds every mapped vertex
+        // and is their box to within the rounding pad (a few ulps of the coordinates).
+        EXPECT_LE(test::largest_gap(vertices, exact), 1e-4f);
+    }
+}
+
 }  // namespace
 }  // namespace rebraid
