@@ -78,6 +78,49 @@ int largest_live(const float* bounds, unsigned live) {
     return best;
 }
 
+#ifdef __AVX2__
+/// Raises `support` over the corners of the whole leaf `leaf` (not part of one) from its
+/// pre-arranged rows (leaf_rows.h; `rows` past the padding), eight triangles at a time. The
+/// projections are summed as Support::offer's are compiled and the vertex kept is the first
+/// of the largest in offer order, so the result is offer's, bit for bit.
+void raise_support_from_rows(const float* rows, NodeRef leaf, Vec3f d, Support& support) {
+    const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
+    const float* leaf_rows = rows + std::size_t(9) * first;
+    const __m256 dx = _mm256_set1_ps(d.x), dy = _mm256_set1_ps(d.y), dz = _mm256_set1_ps(d.z);
+    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    for (std::uint32_t base = 0; base < count; base += kBvhWidth) {
+        // Loads past the leaf read the next rows or the buffer's padding: masked off.
+        const __m256 used =
+            _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(int(count - base)), lanes));
+        __m256 projections[3];
+        for (int c = 0; c < 3; ++c) {
+            const float* row = leaf_rows + std::size_t(3 * c) * count + base;
+            const __m256 x = _mm256_loadu_ps(row), y = _mm256_loadu_ps(row + count),
+                         z = _mm256_loadu_ps(row + 2 * count);
+            projections[c] = _mm256_blendv_ps(
+                _mm256_set1_ps(-kInfinity),
+                _mm256_fmadd_ps(dz, z, _mm256_fmadd_ps(dx, x, _mm256_mul_ps(dy, y))), used);
+        }
+        __m256 largest =
+            _mm256_max_ps(_mm256_max_ps(projections[0], projections[1]), projections[2]);
+        largest = _mm256_max_ps(largest, _mm256_permute2f128_ps(largest, largest, 1));
+        largest = _mm256_max_ps(largest, _mm256_shuffle_ps(largest, largest, 0b01001110));
+        largest = _mm256_max_ps(largest, _mm256_shuffle_ps(largest, largest, 0b10110001));
+        const float value = _mm256_cvtss_f32(largest);
+        if (!(value > support.best)) continue;
+        unsigned at[3];
+        for (int c = 0; c < 3; ++c)
+            at[c] =
+                unsigned(_mm256_movemask_ps(_mm256_cmp_ps(projections[c], largest, _CMP_EQ_OQ)));
+        const int lane = std::countr_zero(at[0] | at[1] | at[2]);
+        const int corner = (at[0] >> lane) & 1u ? 0 : ((at[1] >> lane) & 1u ? 1 : 2);
+        const float* row = leaf_rows + std::size_t(3 * corner) * count + base + lane;
+        support.best = value;
+        support.best_vertex = {row[0], row[count], row[2 * count]};
+    }
+}
+#endif
+
 /// Raises `support` over the vertices of the triangles under `ref` along `d`, skipping
 /// subtrees that cannot beat it by more than `slack`. Children are taken in the order of
 /// their bounds, largest first: its vertices raise the best early and prune the siblings.
@@ -107,6 +150,13 @@ void raise_support(const ObjectBvh& bvh, NodeRef ref, Vec3f d, float slack, Supp
             support.skipped = std::max(support.skipped, bound);
             continue;
         }
+#ifdef __AVX2__
+        if (node.children[c].is_leaf() && !bvh.leaf_rows.empty()) {
+            raise_support_from_rows(bvh.leaf_rows.data() + kLeafRowPadding, node.children[c], d,
+                                    support);
+            continue;
+        }
+#endif
         raise_support(bvh, node.children[c], d, slack, support);
     }
 }

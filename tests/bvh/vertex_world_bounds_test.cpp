@@ -63,6 +63,42 @@ TEST(VertexWorldBounds, DefaultToleranceHoldsEveryVertexWithinOnePercent) {
     check_every_node(0.01f);
 }
 
+TEST(VertexWorldBounds, LeafRowsGiveTheBitsOfTheCorners) {
+    // Leaves of up to 16 triangles (two row chunks) searched from the pre-arranged rows and
+    // from the corner copies: the same support values and vertices, bit for bit.
+    BuildSettings settings;
+    settings.max_leaf_size = 16;
+    settings.intersection_cost = 0.02f;  // cheap triangles: large leaves
+    ObjectBvh with_rows = build_object_bvh(make_tree({}), settings);
+    ASSERT_FALSE(with_rows.leaf_rows.empty());
+    ObjectBvh corners_only = with_rows;
+    corners_only.leaf_rows.clear();
+    std::uint32_t largest_leaf = 0;
+    for (const NodeWithBox& node : every_node(with_rows))
+        if (node.ref.is_leaf()) largest_leaf = std::max(largest_leaf, node.ref.prim_count());
+    ASSERT_GT(largest_leaf, 8u);
+    Random random(11);
+    for (int trial = 0; trial < 16; ++trial) {
+        const AffineTransform to_world = test::random_transform(random, 50.0f, trial % 2 == 1);
+        const Vec3f direction = to_world.transform_vector({0.3f, -1.0f, 0.2f});
+        for (const NodeWithBox& node : every_node(with_rows)) {
+            if (!node.ref.is_inner()) continue;
+            for (float tolerance : {0.0f, 0.01f})
+                EXPECT_EQ(
+                    vertex_world_bounds(with_rows, node.ref, node.box, to_world, tolerance),
+                    vertex_world_bounds(corners_only, node.ref, node.box, to_world, tolerance));
+            // Along the object's axes many vertices tie (rings of the trunk, flat leaves):
+            // the first of them in leaf order is the one kept.
+            for (Vec3f d : {direction, Vec3f{0, 0, 1}, Vec3f{0, -1, 0}, Vec3f{1, 0, 0}}) {
+                const VertexSupport rows = vertex_support(with_rows, node.ref, d, 0.0f);
+                const VertexSupport plain = vertex_support(corners_only, node.ref, d, 0.0f);
+                EXPECT_EQ(rows.value, plain.value);
+                EXPECT_EQ(rows.vertex, plain.vertex);
+            }
+        }
+    }
+}
+
 TEST(VertexWorldBounds, TighterThanTransformedChildrenUnderRotation) {
     const ObjectBvh bvh = build_object_bvh(make_torus_knot({}));
     const AffineTransform to_world = AffineTransform::rotate(normalize(Vec3f{1, 2, 3}), 0.7f);
