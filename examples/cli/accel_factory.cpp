@@ -202,6 +202,7 @@ const std::vector<VariantKey>& variant_keys() {
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"instance-entry-cost", real_number(&Settings::instance_entry_cost)},
         {"estimate-levels", whole_number(&Settings::estimate_levels, 8)},
+        {"world-space-estimate-levels", whole_number(&Settings::world_space_estimate_levels, 8)},
         {"estimate-max-brefs", whole_number(&Settings::estimate_max_brefs, 1u << 30)},
         {"estimate-give-up", whole_number(&Settings::estimate_give_up, 64)},
         {"estimate-give-up-brefs", whole_number(&Settings::estimate_give_up_brefs, 1u << 30)},

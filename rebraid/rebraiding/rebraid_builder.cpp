@@ -64,7 +64,10 @@ public:
           scratch_(scratch),
           targets_(targets),
           source_(source),
-          settings_(settings) {}
+          settings_(settings),
+          world_space_settings_(settings) {
+        world_space_settings_.estimate_levels = settings.world_space_estimate_levels;
+    }
 
     /// Steps (1)-(2): termination tests (§4.4), then opening (§4.2, §5.3); then the SAH split
     /// search of step (3) (§4.3). `info` describes the segment's BRefs; `scan` is their
@@ -177,7 +180,7 @@ private:
                 criterion.selected = overlapping;
             }
             if (!estimate_opening(range(segment), info, targets_, criterion, source_,
-                                  segment.free_space(), settings_)
+                                  segment.free_space(), estimate_settings(segment))
                      .lowers_sah()) {
                 // The subtree below may still open (its segments are smaller), unless the
                 // estimates have said no often enough in a row, or once for many BRefs.
@@ -194,6 +197,17 @@ private:
         return open_brefs(segment, prims_, targets_, criterion, source_, threshold, &info);
     }
 
+    /// The settings the segment's SAH estimate uses: world_space_estimate_levels when every
+    /// BRef belongs to an instance placed by the identity (a scan that stops at the first
+    /// that is not, the first BRef on instanced scenes).
+    const RebraidSettings& estimate_settings(const BRefSegment& segment) const {
+        for (const BuildPrim& prim : range(segment))
+            if (!(source_.object_to_world(targets_[prim.id].instance_id) ==
+                  AffineTransform::identity()))
+                return settings_;
+        return world_space_settings_;
+    }
+
     std::span<BuildPrim> range(const BRefSegment& s) const {
         return prims_.subspan(s.start, s.size());
     }
@@ -203,6 +217,7 @@ private:
     std::span<BRefTarget> targets_;
     const BRefSource& source_;
     const RebraidSettings& settings_;
+    RebraidSettings world_space_settings_;  ///< settings_ with world_space_estimate_levels
     // A statistic only: the sum is the same whatever order the tasks add in.
     mutable std::atomic<std::uint64_t> opened_{0};
 };

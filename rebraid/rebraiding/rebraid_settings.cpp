@@ -44,6 +44,9 @@ void RebraidSettings::validate() const {
     if (estimate_levels > 8)
         throw Error("re-braiding setting estimate_levels " + std::to_string(estimate_levels) +
                     " must be at most 8");
+    if (world_space_estimate_levels > 8)
+        throw Error("re-braiding setting world_space_estimate_levels " +
+                    std::to_string(world_space_estimate_levels) + " must be at most 8");
     if (opening_rule != OpeningRule::extent && opening_rule != OpeningRule::sah &&
         opening_rule != OpeningRule::overlap)
         throw Error("re-braiding setting opening_rule " + std::to_string(int(opening_rule)) +

@@ -285,6 +285,30 @@ TEST(RebraidOpening, GivingUpAtOneNoForManyBRefsOnlyPrunesSegmentsThatLarge) {
     EXPECT_EQ(hash_of(build_with(0, 401)), hash_of(never));
 }
 
+TEST(RebraidOpening, WorldSpaceSegmentsEstimateWithTheirOwnLevels) {
+    auto hash_with = [](const Scene& scene, const std::vector<ObjectBvh>& bvhs,
+                        std::uint32_t levels, std::uint32_t world_space_levels) {
+        RebraidBuild build = build_rebraid(scene, bvhs,
+                                           {.opening_rule = OpeningRule::sah,
+                                            .estimate_levels = levels,
+                                            .world_space_estimate_levels = world_space_levels,
+                                            .keep_cheaper_unopened = false});
+        return structure_hash_of(scene, bvhs, std::move(build.top));
+    };
+    // Objects built in world space (identity placements): their own levels decide, the
+    // instanced levels do not.
+    const Scene crown = make_crossing_crown_scene();
+    const std::vector<ObjectBvh> crown_bvhs = build_object_bvhs(crown, own_object_bvh_builder());
+    EXPECT_NE(hash_with(crown, crown_bvhs, 2, 4), hash_with(crown, crown_bvhs, 2, 1));
+    EXPECT_EQ(hash_with(crown, crown_bvhs, 2, 4), hash_with(crown, crown_bvhs, 1, 4));
+    // Rotated instances: the other way round.
+    const Scene rotated = test::make_overlap_scene(120, 5);
+    const std::vector<ObjectBvh> rotated_bvhs =
+        build_object_bvhs(rotated, own_object_bvh_builder());
+    EXPECT_NE(hash_with(rotated, rotated_bvhs, 2, 4), hash_with(rotated, rotated_bvhs, 1, 4));
+    EXPECT_EQ(hash_with(rotated, rotated_bvhs, 2, 4), hash_with(rotated, rotated_bvhs, 2, 1));
+}
+
 /// The SAH: every structure over the same instances divides by the same scene box (docs/design.md,
 /// "SAH"), so it compares the expected work of rays through one fixed region.
 double absolute_cost(const Scene& scene, const std::vector<ObjectBvh>& bvhs, TopLevelBvh top) {
