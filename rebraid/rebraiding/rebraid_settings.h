@@ -60,8 +60,11 @@ struct RebraidSettings {
     /// more top-level build of twice the items. The paper notes that subtrees may run out of
     /// budget where objects overlap deep down (§7); on the shared scenes where the rule's
     /// budget was spent in full (brainstem, cg57_cruiser, powerplant) two doublings traced
-    /// 4-23 % faster for 2-9 ms more top build (bench/RESULTS.md).
-    std::uint32_t budget_doublings = 2;
+    /// 4-23 % faster for 2-9 ms more top build (bench/RESULTS.md), and a third cut their
+    /// instructions per diffuse ray by 2.8, 3.4 and 14 % for 2.7-19 ms more (callgrind;
+    /// per-frame tops of DynamicSceneAccel search no budgets). Where a doubling no longer pays
+    /// (fzk_haus, crown, the forests) the search stops by itself.
+    std::uint32_t budget_doublings = 3;
     /// Least cost reduction for the budget search to double again, relative to the part of
     /// the SAH cost the top level itself makes (its nodes and the boxes entering objects).
     float budget_search_min_gain = 0.01f;
