@@ -16,16 +16,27 @@ namespace {
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
-/// d · p with the products summed in the order AffineTransform::transform_vector uses.
+/// ax bx + ay by + az bz, rounded the one way every projection of the search uses (the SIMD
+/// forms below included), whatever the compiler would contract: with fused multiply-adds
+/// where the target has them, as (ax bx + ay by) + az bz otherwise.
+float sum_of_products(float ax, float bx, float ay, float by, float az, float bz) {
+#ifdef __FMA__
+    return std::fma(az, bz, std::fma(ax, bx, ay * by));
+#else
+    return (ax * bx + ay * by) + az * bz;
+#endif
+}
+
+/// d · p.
 float project(Vec3f d, Vec3f p) {
-    return (d.x * p.x + d.y * p.y) + d.z * p.z;
+    return sum_of_products(d.x, p.x, d.y, p.y, d.z, p.z);
 }
 
 /// The largest d · p over the corners of `box`: an upper bound for every point inside.
 float box_bound(const BBox3f& box, Vec3f d) {
-    return (d.x * (d.x > 0.0f ? box.max.x : box.min.x) +
-            d.y * (d.y > 0.0f ? box.max.y : box.min.y)) +
-           d.z * (d.z > 0.0f ? box.max.z : box.min.z);
+    return sum_of_products(d.x, d.x > 0.0f ? box.max.x : box.min.x, d.y,
+                           d.y > 0.0f ? box.max.y : box.min.y, d.z,
+                           d.z > 0.0f ? box.max.z : box.min.z);
 }
 
 /// A support value being searched: the best vertex projection found, and the largest bound
@@ -52,8 +63,7 @@ void child_bounds_along(const WideNode& node, Vec3f d, int count, float* bounds)
     const float* by = d.y > 0.0f ? node.upper_y : node.lower_y;
     const float* bz = d.z > 0.0f ? node.upper_z : node.lower_z;
 #ifdef __AVX2__
-    // The products summed as the compiler contracts box_bound's under -mfma, so that both
-    // give the same bits.
+    // Summed as sum_of_products does (AVX2 builds have FMA), so box_bound gives the same bits.
     const __m256 sum =
         _mm256_fmadd_ps(_mm256_set1_ps(d.z), _mm256_load_ps(bz),
                         _mm256_fmadd_ps(_mm256_set1_ps(d.x), _mm256_load_ps(bx),
@@ -64,7 +74,7 @@ void child_bounds_along(const WideNode& node, Vec3f d, int count, float* bounds)
     _mm256_store_ps(bounds, _mm256_blendv_ps(_mm256_set1_ps(-kInfinity), sum, used));
 #else
     for (int c = 0; c < kBvhWidth; ++c)
-        bounds[c] = c < count ? (d.x * bx[c] + d.y * by[c]) + d.z * bz[c] : -kInfinity;
+        bounds[c] = c < count ? sum_of_products(d.x, bx[c], d.y, by[c], d.z, bz[c]) : -kInfinity;
 #endif
 }
 
@@ -81,8 +91,8 @@ int largest_live(const float* bounds, unsigned live) {
 #ifdef __AVX2__
 /// Raises `support` over the corners of the whole leaf `leaf` (not part of one) from its
 /// pre-arranged rows (leaf_rows.h; `rows` past the padding), eight triangles at a time. The
-/// projections are summed as Support::offer's are compiled and the vertex kept is the first
-/// of the largest in offer order, so the result is offer's, bit for bit.
+/// projections are summed as sum_of_products does and the vertex kept is the first of the
+/// largest in offer order, so the result is offer's, bit for bit.
 void raise_support_from_rows(const float* rows, NodeRef leaf, Vec3f d, Support& support) {
     const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
     const float* leaf_rows = rows + std::size_t(9) * first;
