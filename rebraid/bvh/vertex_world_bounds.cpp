@@ -59,10 +59,10 @@ struct Support {
 /// unused ones) into `bounds`. Reads the node's planes by the sign of each component, so a
 /// slot costs three multiply-adds and no branch.
 void child_bounds_along(const WideNode& node, Vec3f d, int count, float* bounds) {
+#ifdef __AVX2__
     const float* bx = d.x > 0.0f ? node.upper_x : node.lower_x;
     const float* by = d.y > 0.0f ? node.upper_y : node.lower_y;
     const float* bz = d.z > 0.0f ? node.upper_z : node.lower_z;
-#ifdef __AVX2__
     // Summed as sum_of_products does (AVX2 builds have FMA), so box_bound gives the same bits.
     const __m256 sum =
         _mm256_fmadd_ps(_mm256_set1_ps(d.z), _mm256_load_ps(bz),
@@ -74,7 +74,7 @@ void child_bounds_along(const WideNode& node, Vec3f d, int count, float* bounds)
     _mm256_store_ps(bounds, _mm256_blendv_ps(_mm256_set1_ps(-kInfinity), sum, used));
 #else
     for (int c = 0; c < kBvhWidth; ++c)
-        bounds[c] = c < count ? sum_of_products(d.x, bx[c], d.y, by[c], d.z, bz[c]) : -kInfinity;
+        bounds[c] = c < count ? box_bound(node.child_bounds(c), d) : -kInfinity;
 #endif
 }
 

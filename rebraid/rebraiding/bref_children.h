@@ -36,19 +36,17 @@ struct BRefSource {
     /// Optional: the children's world boxes of BRefs to inner nodes, computed once per BRef.
     BRefChildBounds* child_bounds = nullptr;
 
-    const ObjectBvh& bvh_of(const BRefTarget& target) const {
-        return object_bvhs[instances[target.instance_id].mesh_id];
-    }
+    MeshId mesh_of(const BRefTarget& target) const { return instances[target.instance_id].mesh_id; }
+    const ObjectBvh& bvh_of(const BRefTarget& target) const { return object_bvhs[mesh_of(target)]; }
     const AffineTransform& object_to_world(InstanceId instance) const {
         return instances[instance].object_to_world;
     }
     /// The world box of a BRef to `node` (whose object box is `node_box`) of the instance of
     /// `target`, by the bounds rule.
     BBox3f world_bounds(const BRefTarget& target, NodeRef node, const BBox3f& node_box) const {
-        const Instance& instance = instances[target.instance_id];
-        const MeshId mesh = instance.mesh_id;
-        return bref_world_bounds(object_bvhs[mesh], node, node_box, instance.object_to_world,
-                                 bounds_rule,
+        const MeshId mesh = mesh_of(target);
+        return bref_world_bounds(object_bvhs[mesh], node, node_box,
+                                 object_to_world(target.instance_id), bounds_rule,
                                  support_tables.empty() ? nullptr : &support_tables[mesh]);
     }
     bool has_exact_counts() const { return subtree_counts != nullptr; }
@@ -121,7 +119,7 @@ void for_each_bref_child_bounds(const BRefSource& source, std::uint32_t slot,
 /// (precondition: has_exact_counts()).
 inline std::uint32_t exact_prim_count(const BRefSource& source, const BRefTarget& target,
                                       NodeRef node) {
-    return source.subtree_counts->prim_count(source.instances[target.instance_id].mesh_id, node);
+    return source.subtree_counts->prim_count(source.mesh_of(target), node);
 }
 
 }  // namespace rebraid
