@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <optional>
 #include <string>
@@ -156,19 +157,22 @@ bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
     // +-inf, of the right signs when the origin is inside or outside the slab; NaN (an origin
     // on a padded plane, or NaN in the ray) goes on to the traversal.
 #ifdef REBRAID_GLUE_SSE
-    const __m128 inverse =
-        _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(ray.dir_x, ray.dir_y, ray.dir_z, 1.0f));
-    const __m128 org = _mm_setr_ps(ray.org_x, ray.org_y, ray.org_z, 0.0f);
+    // RTCRay keeps (org, tnear) and (dir, time) in two groups of four floats: one load each.
+    // Lane 3 meets the planes -inf and +inf, which give it the slab (-inf, +inf) whatever
+    // tnear and time are (or NaN, sent on to the traversal).
+    static_assert(offsetof(RTCRay, tnear) == 12 && offsetof(RTCRay, dir_x) == 16 &&
+                  offsetof(RTCRay, time) == 28);
+    const __m128 org = _mm_loadu_ps(&ray.org_x);
+    const __m128 inverse = _mm_div_ps(_mm_set1_ps(1.0f), _mm_loadu_ps(&ray.dir_x));
     const __m128 t0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_min_), org), inverse);
     const __m128 t1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_max_), org), inverse);
     if (_mm_movemask_ps(_mm_cmpunord_ps(t0, t1)) != 0) return false;
-    // Lane 3 (origin 0, direction 1, planes -inf and +inf) takes no part.
     __m128 entry = _mm_min_ps(t0, t1);
     __m128 exit = _mm_max_ps(t0, t1);
     entry = _mm_max_ps(entry, _mm_shuffle_ps(entry, entry, _MM_SHUFFLE(1, 0, 3, 2)));
     exit = _mm_min_ps(exit, _mm_shuffle_ps(exit, exit, _MM_SHUFFLE(1, 0, 3, 2)));
-    entry = _mm_max_ss(_mm_max_ss(entry, _mm_shuffle_ps(entry, entry, 1)), _mm_set_ss(ray.tnear));
-    exit = _mm_min_ss(_mm_min_ss(exit, _mm_shuffle_ps(exit, exit, 1)), _mm_set_ss(ray.tfar));
+    entry = _mm_max_ss(_mm_max_ss(entry, _mm_shuffle_ps(entry, entry, 1)), _mm_load_ss(&ray.tnear));
+    exit = _mm_min_ss(_mm_min_ss(exit, _mm_shuffle_ps(exit, exit, 1)), _mm_load_ss(&ray.tfar));
     const float first = _mm_cvtss_f32(entry), last = _mm_cvtss_f32(exit);
 #else
     const float org[3] = {ray.org_x, ray.org_y, ray.org_z};
@@ -194,6 +198,11 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     if (!(in.tnear <= in.tfar)) return;
     if (is_ray_mask_supported_ && in.mask == 0) return;
     if (misses_bounds(in)) return;
+    intersect_within_bounds(rayhit);
+}
+
+void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
+    const RTCRay& in = rayhit.ray;
     const Ray ray = glue::from_embree_ray(in);
     const LocatedHit located = accel_->intersect_located(ray);
     const Hit& hit = located.hit;

@@ -127,6 +127,10 @@ private:
     void pad_bounds();
     /// True when `ray` certainly misses every triangle: it misses the padded scene bounds.
     bool misses_bounds(const RTCRay& ray) const noexcept;
+    /// intersect1 for an active ray that may hit something. Out of line, so that the rays
+    /// intersect1 turns away (most of a frame that frames a whole scene) return without
+    /// paying for the traversal's registers and stack.
+    [[gnu::noinline]] void intersect_within_bounds(RTCRayHit& rayhit) const noexcept;
 
     RTCScene scene_ = nullptr;
     EmbreeAccelSettings settings_;
