@@ -33,6 +33,12 @@ Suites (every command runs from the repository root):
              default scene, every shared scene and the generated kinds (deterministic, so one
              round; needs valgrind and build/bench/trace_rays, without which a run of every
              suite skips it; --quick: the default scene alone on 200 rays)
+  preload    `python3 bench/tools/preload_viewer.py SCENE --runs 3` for every shared scene:
+             Embree's own viewer (embree-tools) on the scene exported to Embree's XML,
+             instanced and flattened, and instanced under build/lib/librebraid_preload.so,
+             taking turns (Mrays/s of its 640x360 camera rays), with rebraid's build time
+             beside Embree's commit (needs `viewer`, without which a run of every suite skips
+             it; --quick: one run on the first shared scene)
 
 A round runs every command of a suite once, each as its own process on the same rays and
 seeds; --rounds K repeats that K times (report.py prints medians over the rounds). Each
@@ -66,7 +72,7 @@ from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENE
                         commit_info, load_average, machine_info, relative_to_repo, repo_path,
                         run, run_json, scene_name)
 
-SUITES = ["structures", "scenes", "generated", "forests", "animate", "instructions"]
+SUITES = ["structures", "scenes", "generated", "forests", "animate", "instructions", "preload"]
 # The structures whose SAH and structure_hash the `structures` suite records.
 STRUCTURE_ACCELS = ["flat", "twolevel", "rebraid"]
 GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
@@ -87,12 +93,14 @@ TMP = "TMP"
 # scene alone).
 FULL = {"rays": 230400, "repetitions": 5, "frames": 20, "animate": [],
         "instruction_rays": 10000, "instruction_scenes": "all",
-        "forest_instances": [100000, 1000000]}
+        "forest_instances": [100000, 1000000], "viewer_runs": 3, "viewer_scenes": "all"}
 QUICK = {"rays": 2000, "repetitions": 1, "frames": 2,
          "animate": ["--width", "64", "--height", "36"],
          "instruction_rays": 200, "instruction_scenes": "default",
-         "forest_instances": [1000]}
+         "forest_instances": [1000], "viewer_runs": 1, "viewer_scenes": "first"}
 COUNT_INSTRUCTIONS = "bench/tools/count_instructions.py"
+PRELOAD_VIEWER = "bench/tools/preload_viewer.py"
+PRELOAD_LIBRARY = "build/lib/librebraid_preload.so"
 
 
 def shared_scenes():
@@ -193,6 +201,12 @@ def jobs_of(suite, settings, threads):
             jobs += [(kind, count(f"{TMP}/{kind}.glb"), [generate_command(kind, threads)])
                      for kind in GENERATED_KINDS]
         return jobs
+    if suite == "preload":
+        scenes = shared_scenes()
+        if settings["viewer_scenes"] == "first":
+            scenes = scenes[:1]
+        return [(scene_name(s), ["python3", PRELOAD_VIEWER, s, "--runs",
+                                 str(settings["viewer_runs"])], []) for s in scenes]
     if suite == "animate":
         jobs = [("default", animate_command(None, None, settings, threads), [])]
         static = ANIMATE_STATIC if os.path.exists(repo_path(ANIMATE_STATIC)) else None
@@ -253,6 +267,13 @@ def main():
     if not os.path.exists(repo_path(BINARY)):
         sys.exit(f"collect.py: {BINARY} is missing: build the project first")
     suites = args.suite or SUITES
+    if "preload" in suites and not (shutil.which("viewer")
+                                    and os.path.exists(repo_path(PRELOAD_LIBRARY))):
+        missing = f"Embree's viewer (embree-tools) or {PRELOAD_LIBRARY} is missing"
+        if args.suite:
+            sys.exit(f"collect.py: suite preload: {missing}")
+        print(f"collect.py: skipping suite preload: {missing}", file=sys.stderr)
+        suites = [s for s in suites if s != "preload"]
     if "instructions" in suites and not (shutil.which("valgrind")
                                          and os.path.exists(repo_path(TRACER))):
         missing = f"valgrind or {TRACER} (build the target trace_rays) is missing"
