@@ -208,7 +208,8 @@ def section_method(runs):
 - SAH, node, BRef and work counts are exact and the same in every round. SAH is divided by the
   same scene box for every structure; Embree's structures report none.
 - Structures: `embree-flat` and `embree-instanced` are Embree's BVHs over all triangles and
-  over instances; `flat` is the project's BVH over all triangles; `twolevel` its BVH over
+  over instances, with Embree's default scene flags and build quality (not
+  `RTC_SCENE_FLAG_ROBUST`), as an Embree application gets them; `flat` is the project's BVH over all triangles; `twolevel` its BVH over
   instances (one BRef per instance); `rebraid` the partially re-braided top level with the
   project's default rules (SAH-tested opening, BRef boxes from transformed vertices); `paper`
   is the variant `{PAPER}`: the paper's rules (extent opening,

@@ -26,6 +26,13 @@ std::unique_ptr<Accel> build_without_options(const Scene& scene, const AccelOpti
     return std::make_unique<AccelType>(scene);
 }
 
+template <class EmbreeAccelType>
+std::unique_ptr<Accel> build_embree(const Scene& scene, const AccelOptions& options) {
+    glue::EmbreeReferenceSettings settings;
+    settings.is_robust = options.is_embree_robust;
+    return std::make_unique<EmbreeAccelType>(scene, settings);
+}
+
 std::unique_ptr<Accel> build_two_level(const Scene& scene, const AccelOptions& options) {
     return std::make_unique<InstancedAccel>(
         build_two_level_accel(scene, make_object_builder(options.object_builder)));
@@ -39,9 +46,9 @@ std::unique_ptr<Accel> build_rebraid(const Scene& scene, const AccelOptions& opt
 // Adding a structure to the command line is one line here.
 constexpr std::array kAccelTable{
     AccelEntry{"embree-flat", "Embree, every instance's triangles in one world-space scene",
-               &build_without_options<glue::EmbreeFlatAccel>},
+               &build_embree<glue::EmbreeFlatAccel>, false, false, true},
     AccelEntry{"embree-instanced", "Embree, one scene per mesh plus one instance per instance",
-               &build_without_options<glue::EmbreeInstancedAccel>},
+               &build_embree<glue::EmbreeInstancedAccel>, false, false, true},
     AccelEntry{"flat", "one BVH over every instance's triangles in world space (no instancing)",
                &build_without_options<FlatAccel>},
     AccelEntry{"twolevel", "object BVHs plus a binned-SAH top level over the instances",
@@ -212,11 +219,28 @@ const std::vector<VariantKey>& variant_keys() {
         {"overlap-threshold", real_number(&Settings::overlap_threshold)},
         {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
         {"budget-search-min-use", real_number(&Settings::budget_search_min_use)},
+        {"robust",
+         {[](const VariantValue& value, AccelOptions& options) {
+              options.is_embree_robust =
+                  value.choice<bool>(std::vector<std::pair<std::string_view, bool>>{
+                      {"1", true}, {"0", false}, {"true", true}, {"false", false}});
+          },
+          [](const AccelOptions& a, const AccelOptions& b) {
+              return a.is_embree_robust == b.is_embree_robust;
+          }}},
     };
     return keys;
 }
 
 constexpr std::string_view kObjectBuilderKey = "object-builder";
+constexpr std::string_view kRobustKey = "robust";
+
+/// Which structures a variant key changes: AccelEntry's flag for it.
+bool AccelEntry::*structures_using(std::string_view key) {
+    if (key == kObjectBuilderKey) return &AccelEntry::has_object_bvhs;
+    if (key == kRobustKey) return &AccelEntry::is_embree;
+    return &AccelEntry::has_rebraid_settings;
+}
 
 /// The names of the structures for which `uses` holds, for messages ("twolevel or rebraid").
 std::string names_of_structures_using(bool AccelEntry::*uses) {
@@ -232,13 +256,11 @@ void apply_variant_setting(std::string_view spec, const AccelEntry& entry, std::
                            std::string_view value, AccelOptions& options) {
     for (const VariantKey& variant_key : variant_keys()) {
         if (variant_key.key != key) continue;
-        const bool is_object_builder = key == kObjectBuilderKey;
-        if (is_object_builder ? !entry.has_object_bvhs : !entry.has_rebraid_settings)
+        bool AccelEntry::*uses = structures_using(key);
+        if (!(entry.*uses))
             throw Error("accel '" + std::string(spec) + "': " + std::string(entry.name) +
                         " does not use " + std::string(key) + "; it is a setting of " +
-                        names_of_structures_using(is_object_builder
-                                                      ? &AccelEntry::has_object_bvhs
-                                                      : &AccelEntry::has_rebraid_settings));
+                        names_of_structures_using(uses));
         return variant_key.setting.apply(VariantValue(spec, key, value), options);
     }
     throw Error("accel '" + std::string(spec) + "': unknown setting '" + std::string(key) +
@@ -372,9 +394,7 @@ void check_variants_differ(std::span<const AccelVariant> variants) {
             if (a.entry != b.entry) continue;
             bool is_same = true;
             for (const VariantKey& variant_key : variant_keys()) {
-                const bool is_used = variant_key.key == kObjectBuilderKey
-                                         ? a.entry->has_object_bvhs
-                                         : a.entry->has_rebraid_settings;
+                const bool is_used = a.entry->*structures_using(variant_key.key);
                 if (is_used && !variant_key.setting.is_same(a.options, b.options)) is_same = false;
             }
             if (is_same)

@@ -68,8 +68,12 @@ public:
 
 class EmbreeMethod final : public AnimateMethod {
 public:
+    // Embree's default scene flags (not RTC_SCENE_FLAG_ROBUST), as an Embree application that
+    // sets none gets them.
     EmbreeMethod(const DynamicScene& scene, glue::EmbreeDynamicMode mode)
-        : name_(glue::embree_dynamic_mode_name(mode)), accel_(scene, mode) {}
+        : name_(glue::embree_dynamic_mode_name(mode)),
+          accel_(scene, mode,
+                 glue::EmbreeReferenceSettings{.is_robust = false, .device_config = {}}) {}
     const std::string& name() const override { return name_; }
     double build_ms() const override { return accel_.stats().build_ms; }
     void update(AnimateFrameRow& row) override {

@@ -2,6 +2,7 @@
 // options that would change nothing refused, and each error one line in the user's words.
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdlib>
@@ -293,6 +294,28 @@ TEST(CliMessages, BuildOptionsOfOtherStructuresAreRefused) {
     const CommandResult mixed = run_rebraid({"bench", "--accel", "twolevel,rebraid", "--opening",
                                              "extent", "--rays", "200", "--repetitions", "1"});
     EXPECT_EQ(mixed.exit_code, 0) << mixed.err;
+}
+
+TEST(CliMessages, RobustIsASettingOfEmbreesStructuresOnly) {
+    expect_error(run_rebraid({"stats", "--accel", "flat:robust=1"}),
+                 "accel 'flat:robust=1': flat does not use robust; it is a setting of embree-flat "
+                 "or embree-instanced");
+    expect_error(run_rebraid({"stats", "--accel", "embree-flat:robust=2"}),
+                 "accel 'embree-flat:robust=2': robust=2: valid values: 1, 0, true, false");
+    // Embree's default flags are robust=0: naming them again is the same structure.
+    expect_error(run_rebraid({"bench", "--accel", "embree-flat,embree-flat:robust=0"}),
+                 "accel 'embree-flat' and 'embree-flat:robust=0' build the same structure");
+    // Both modes side by side, on the same rays: they agree up to edge grazes.
+    const CommandResult both =
+        run_rebraid({"bench", "--accel", "embree-instanced,embree-instanced:robust=1", "--rays",
+                     "400", "--repetitions", "1", "--json"});
+    ASSERT_EQ(both.exit_code, 0) << both.err;
+    const nlohmann::json rows = nlohmann::json::parse(both.out);
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_EQ(rows[0].at("accel"), "embree-instanced");
+    EXPECT_EQ(rows[1].at("accel"), "embree-instanced:robust=1");
+    EXPECT_NEAR(rows[0].at("hits_primary").get<double>(), rows[1].at("hits_primary").get<double>(),
+                4.0);
 }
 
 // ---- Outputs that explain themselves ---------------------------------------------------------
