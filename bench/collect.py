@@ -39,6 +39,10 @@ Suites (every command runs from the repository root):
              taking turns (Mrays/s of its 640x360 camera rays), with rebraid's build time
              beside Embree's commit (needs `viewer`, without which a run of every suite skips
              it; --quick: one run on the first shared scene)
+  dropin     `python3 bench/tools/dropin_grid.py --run TMP/dropin`: examples/dropin built
+             against the installed package (once, by `--prepare`), its `--bench`: a grid of
+             instanced torus knots and the same grid flattened, traced by rtcIntersect1,
+             EmbreeAccel::intersect1 and the user-geometry scene (one thread)
 
 A round runs every command of a suite once, each as its own process on the same rays and
 seeds; --rounds K repeats that K times (report.py prints medians over the rounds). Each
@@ -55,7 +59,8 @@ times, so any machine load leaves its results as they are (it only runs longer):
 took 9 minutes on the idle machine (14 on a shared one; most of it the builds of trees,
 powerplant and crown, whose millions of triangles valgrind emulates slowly), which brings the
 full default collection to about 30 minutes; its --quick part (the default scene) adds about
-1.3 minutes.
+1.3 minutes. `preload` takes about 20 s a round and `dropin` about 15 s a round (plus half a
+minute, once, to install the package and build the example).
 """
 import argparse
 import datetime
@@ -72,7 +77,8 @@ from results_io import (BINARY, DEFAULT_ACCELS, PAPER, RESULTS_DIR, SHARED_SCENE
                         commit_info, load_average, machine_info, relative_to_repo, repo_path,
                         run, run_json, scene_name)
 
-SUITES = ["structures", "scenes", "generated", "forests", "animate", "instructions", "preload"]
+SUITES = ["structures", "scenes", "generated", "forests", "animate", "instructions", "preload",
+          "dropin"]
 # The structures whose SAH and structure_hash the `structures` suite records.
 STRUCTURE_ACCELS = ["flat", "twolevel", "rebraid"]
 GENERATED_KINDS = ["trees", "crown", "powerplant", "city"]
@@ -101,6 +107,7 @@ QUICK = {"rays": 2000, "repetitions": 1, "frames": 2,
 COUNT_INSTRUCTIONS = "bench/tools/count_instructions.py"
 PRELOAD_VIEWER = "bench/tools/preload_viewer.py"
 PRELOAD_LIBRARY = "build/lib/librebraid_preload.so"
+DROPIN_GRID = "bench/tools/dropin_grid.py"
 
 
 def shared_scenes():
@@ -207,6 +214,9 @@ def jobs_of(suite, settings, threads):
             scenes = scenes[:1]
         return [(scene_name(s), ["python3", PRELOAD_VIEWER, s, "--runs",
                                  str(settings["viewer_runs"])], []) for s in scenes]
+    if suite == "dropin":
+        return [("grid", ["python3", DROPIN_GRID, "--run", f"{TMP}/dropin"],
+                 [["python3", DROPIN_GRID, "--prepare", f"{TMP}/dropin"]])]
     if suite == "animate":
         jobs = [("default", animate_command(None, None, settings, threads), [])]
         static = ANIMATE_STATIC if os.path.exists(repo_path(ANIMATE_STATIC)) else None
