@@ -277,20 +277,21 @@ def main():
     if not os.path.exists(repo_path(BINARY)):
         sys.exit(f"collect.py: {BINARY} is missing: build the project first")
     suites = args.suite or SUITES
-    if "preload" in suites and not (shutil.which("viewer")
-                                    and os.path.exists(repo_path(PRELOAD_LIBRARY))):
-        missing = f"Embree's viewer (embree-tools) or {PRELOAD_LIBRARY} is missing"
+    # Suites that need tools beyond the build: without them a run of every suite skips
+    # them, and asking for one by name fails.
+    requirements = {
+        "preload": (shutil.which("viewer") and os.path.exists(repo_path(PRELOAD_LIBRARY)),
+                    f"Embree's viewer (embree-tools) or {PRELOAD_LIBRARY} is missing"),
+        "instructions": (shutil.which("valgrind") and os.path.exists(repo_path(TRACER)),
+                         f"valgrind or {TRACER} (build the target trace_rays) is missing"),
+    }
+    for suite, (is_met, missing) in requirements.items():
+        if suite not in suites or is_met:
+            continue
         if args.suite:
-            sys.exit(f"collect.py: suite preload: {missing}")
-        print(f"collect.py: skipping suite preload: {missing}", file=sys.stderr)
-        suites = [s for s in suites if s != "preload"]
-    if "instructions" in suites and not (shutil.which("valgrind")
-                                         and os.path.exists(repo_path(TRACER))):
-        missing = f"valgrind or {TRACER} (build the target trace_rays) is missing"
-        if args.suite:
-            sys.exit(f"collect.py: suite instructions: {missing}")
-        print(f"collect.py: skipping suite instructions: {missing}", file=sys.stderr)
-        suites = [s for s in suites if s != "instructions"]
+            sys.exit(f"collect.py: suite {suite}: {missing}")
+        print(f"collect.py: skipping suite {suite}: {missing}", file=sys.stderr)
+        suites = [s for s in suites if s != suite]
 
     # The command as recorded: the options that shape the results, paths relative to the
     # repository root (an output folder outside it is not recorded).
