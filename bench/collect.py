@@ -59,7 +59,7 @@ times, so any machine load leaves its results as they are (it only runs longer):
 took 9 minutes on the idle machine (14 on a shared one; most of it the builds of trees,
 powerplant and crown, whose millions of triangles valgrind emulates slowly), which brings the
 full default collection to about 30 minutes; its --quick part (the default scene) adds about
-1.3 minutes. `preload` takes about 20 s a round and `dropin` about 15 s a round (plus half a
+1.3 minutes. `preload` takes about 20 s a round and `dropin` about 5 s a round (plus half a
 minute, once, to install the package and build the example).
 """
 import argparse
