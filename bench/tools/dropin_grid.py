@@ -40,13 +40,13 @@ def prepare(folder, build):
     prefix, example = os.path.join(folder, "prefix"), os.path.join(folder, "example")
     run(["cmake", "--install", build, "--prefix", prefix])
     run(["cmake", "-S", "examples/dropin", "-B", example, "-DCMAKE_BUILD_TYPE=Release",
-         f"-DCMAKE_PREFIX_PATH={os.path.abspath(prefix)}"])
+         f"-DCMAKE_PREFIX_PATH={prefix}"])
     run(["cmake", "--build", example])
 
 
 def bench(folder):
     binary = os.path.join(folder, "example", "dropin_example")
-    if not os.path.exists(os.path.join(REPO_ROOT, binary)):
+    if not os.path.exists(binary):
         sys.exit(f"dropin_grid.py: {binary} is missing: run --prepare {folder} first")
     rows = list(csv.DictReader(io.StringIO(run([binary, "--bench"]))))
     result = {"rows": [], "ratios": {}}
@@ -71,10 +71,12 @@ def main():
     action.add_argument("--run", metavar="DIR", help="run the example built in DIR")
     parser.add_argument("--build", default="build", help="build folder (default build)")
     args = parser.parse_args()
+    # DIR from where the command runs; the build folder from the repository root.
+    folder = os.path.abspath(args.prepare or args.run)
     if args.prepare:
-        prepare(args.prepare, args.build)
+        prepare(folder, os.path.join(REPO_ROOT, args.build))
         return
-    json.dump(bench(args.run), sys.stdout, indent=1)
+    json.dump(bench(folder), sys.stdout, indent=1)
     print()
 
 

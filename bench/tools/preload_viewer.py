@@ -79,7 +79,7 @@ def main():
 
     work = tempfile.mkdtemp(prefix="rebraid-viewer-")
     try:
-        run([binary, "export", args.scene, "--embree-xml", work])
+        run([binary, "export", os.path.abspath(args.scene), "--embree-xml", work])
         scene = [viewer, "-i", os.path.join(work, "scene.xml"),
                  "-c", os.path.join(work, "camera.cfg")]
         timed = ["--size", "640", "360", "--benchmark", "2", "8"]
