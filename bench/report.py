@@ -209,9 +209,10 @@ def section_method(runs):
   same scene box for every structure; Embree's structures report none.
 - Structures: `embree-flat` and `embree-instanced` are Embree's BVHs over all triangles and
   over instances, with Embree's default scene flags and build quality (not
-  `RTC_SCENE_FLAG_ROBUST`), as an Embree application gets them; `flat` is the project's BVH over all triangles; `twolevel` its BVH over
-  instances (one BRef per instance); `rebraid` the partially re-braided top level with the
-  project's default rules (SAH-tested opening, BRef boxes from transformed vertices); `paper`
+  `RTC_SCENE_FLAG_ROBUST`), as an Embree application gets them; `flat` is the project's BVH
+  over all triangles; `twolevel` its BVH over instances (one BRef per instance); `rebraid` the
+  partially re-braided top level with the project's default rules (SAH-tested opening, BRef
+  boxes from transformed vertices); `paper`
   is the variant `{PAPER}`: the paper's rules (extent opening,
   transformed node boxes).
 - A "{DASH}" marks a figure the structure or the command does not report.
@@ -597,15 +598,14 @@ def section_dropin(runs):
         first = run.results[0]["output"]
         for scene in sorted({r["scene"] for r in first["rows"]}):
             for mode in [r["mode"] for r in first["rows"] if r["scene"] == scene]:
-                speeds = [row["mrays_per_s"] for r in run.results for row in r["output"]["rows"]
-                          if row["scene"] == scene and row["mode"] == mode]
-                builds = [row["build_ms"] for r in run.results for row in r["output"]["rows"]
+                rounds = [row for r in run.results for row in r["output"]["rows"]
                           if row["scene"] == scene and row["mode"] == mode]
                 ratios = [r["output"]["ratios"][scene][mode] for r in run.results
                           if mode in r["output"]["ratios"].get(scene, {})]
-                rows.append([scene, f"`{mode}`", fmt(median(speeds)),
+                build_ms = median([row["build_ms"] for row in rounds])
+                rows.append([scene, f"`{mode}`", fmt(median([row["mrays_per_s"] for row in rounds])),
                              fmt_ratio(median(ratios)) if ratios else DASH,
-                             fmt(median(builds), 1) if median(builds) else DASH])
+                             fmt(build_ms, 1) if build_ms else DASH])
         out.append(table(["scene", "mode", "Mrays/s", "over rtcIntersect1", "build (ms)"], rows))
     return "\n".join(out)
 

@@ -36,15 +36,23 @@ def relative_to_repo(path):
     return os.path.relpath(os.path.abspath(path), REPO_ROOT)
 
 
-def run(argv, log=sys.stderr):
-    """Runs `argv` (paths relative to the repository root) from the repository root and returns
-    its standard output; exits with its error output when it fails."""
+def run_process(argv, env=None, log=sys.stderr):
+    """Runs `argv` (paths relative to the repository root) from the repository root, in the
+    environment `env` (None: this process's), and returns the finished process with its output;
+    exits with that output when it fails."""
     if log:
         print("$ " + " ".join(argv), file=log, flush=True)
-    result = subprocess.run(argv, cwd=REPO_ROOT, check=False, capture_output=True, text=True)
+    result = subprocess.run(argv, cwd=REPO_ROOT, check=False, capture_output=True, text=True,
+                            env=env)
     if result.returncode != 0:
-        sys.exit(f"command failed ({result.returncode}): {' '.join(argv)}\n{result.stderr}")
-    return result.stdout
+        sys.exit(f"command failed ({result.returncode}): {' '.join(argv)}\n"
+                 f"{result.stdout}{result.stderr}")
+    return result
+
+
+def run(argv, log=sys.stderr):
+    """Runs `argv` as run_process() does and returns its standard output."""
+    return run_process(argv, log=log).stdout
 
 
 def run_json(argv, log=sys.stderr):

@@ -21,19 +21,16 @@ import csv
 import io
 import json
 import os
-import subprocess
 import sys
 
-REPO_ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from results_io import repo_path, run as run_logged  # noqa: E402
+
 EMBREE = "rtcIntersect1"
 
 
 def run(argv):
-    result = subprocess.run(argv, capture_output=True, text=True, cwd=REPO_ROOT)
-    if result.returncode != 0:
-        sys.exit(f"dropin_grid.py: command failed ({result.returncode}): {' '.join(argv)}\n"
-                 f"{result.stdout}{result.stderr}")
-    return result.stdout
+    return run_logged(argv, log=None)
 
 
 def prepare(folder, build):
@@ -74,7 +71,7 @@ def main():
     # DIR from where the command runs; the build folder from the repository root.
     folder = os.path.abspath(args.prepare or args.run)
     if args.prepare:
-        prepare(folder, os.path.join(REPO_ROOT, args.build))
+        prepare(folder, repo_path(args.build))
         return
     json.dump(bench(folder), sys.stdout, indent=1)
     print()

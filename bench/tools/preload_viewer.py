@@ -25,20 +25,17 @@ import os
 import re
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
 
-REPO_ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from results_io import repo_path, run_process  # noqa: E402
+
 CONFIGS = ["embree_instanced", "embree_flat", "preload"]
 
 
 def run(argv, env=None):
-    result = subprocess.run(argv, capture_output=True, text=True, env=env, cwd=REPO_ROOT)
-    if result.returncode != 0:
-        sys.exit(f"preload_viewer.py: command failed ({result.returncode}): {' '.join(argv)}\n"
-                 f"{result.stderr}")
-    return result
+    return run_process(argv, env=env, log=None)
 
 
 def environment(preload=None, log=False):
@@ -70,7 +67,7 @@ def main():
     viewer = shutil.which("viewer")
     if not viewer:
         sys.exit("preload_viewer.py: Embree's `viewer` is missing (Debian: embree-tools)")
-    build = os.path.join(REPO_ROOT, args.build)
+    build = repo_path(args.build)
     binary = os.path.join(build, "examples", "rebraid")
     preload = os.path.join(build, "lib", "librebraid_preload.so")
     for path in (binary, preload):
