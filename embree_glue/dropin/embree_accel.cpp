@@ -208,11 +208,9 @@ void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
     const Hit& hit = located.hit;
     if (!hit.is_hit()) return;
     const glue::EmbreeHitIds& ids = converted_.instance_ids[hit.instance_id];
-    // The corners from the object BVH's leaf-order copy, which the query prefetched as it
-    // found the hit (the mesh's index and vertex arrays would cost two dependent cache
-    // misses on large scenes).
-    const MeshId mesh_id = accel_->instance_targets()[hit.instance_id].mesh;
-    const TriangleVerts& triangle = accel_->object_bvhs()[mesh_id].triangles[located.leaf_position];
+    // The corners as the query copied them from the leaf it tested (the mesh's index and
+    // vertex arrays, or the object BVH's corner copy, would cost cache misses).
+    const TriangleVerts& triangle = located.triangle.corners;
     const std::array<Vec3f, 3> corners = {triangle.v0, triangle.v1, triangle.v2};
     // Our traversal found the triangle and t; the reported attributes are computed again the
     // way Embree computes them (its world-to-object map, its kernel's rounding), so that they

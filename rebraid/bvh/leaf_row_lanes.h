@@ -68,6 +68,18 @@ public:
         while (segments_[s].lane > lane) --s;
         return segments_[s].position + (lane - segments_[s].lane);
     }
+    /// Corners of the triangle in `lane`, from its rows.
+    TriangleVerts corners(std::uint32_t lane) const {
+        std::uint32_t s = segment_count_ - 1;
+        while (segments_[s].lane > lane) --s;
+        const Segment& segment = segments_[s];
+        const float* first = segment.base + (lane - segment.lane);
+        TriangleVerts out;
+        static_assert(sizeof(TriangleVerts) == 9 * sizeof(float));
+        float* values = &out.v0.x;
+        for (std::uint32_t r = 0; r < 9; ++r) values[r] = first[std::size_t(r) * segment.stride];
+        return out;
+    }
     void clear() { count_ = segment_count_ = 0; }
 
 private:

@@ -3,6 +3,7 @@
 #include <bit>
 #include <cstdint>
 
+#include "rebraid/bvh/hit_triangle.h"
 #include "rebraid/bvh/leaf_row_lanes.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/traversal.h"
@@ -12,9 +13,10 @@
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
-/// A hit-data prefetcher that does nothing (intersect_object_bvh_leaf_order's default).
+/// A closer-hit observer that does nothing (intersect_object_bvh_leaf_order's default).
 struct NoHitDataPrefetch {
-    void operator()(std::uint32_t) const {}
+    template <class Corners>
+    void operator()(std::uint32_t, Corners&&) const {}
 };
 
 /// The triangles of several leaves (leaf-order ranges of one BVH) gathered into lanes of
@@ -53,6 +55,8 @@ public:
     std::uint32_t position(std::uint32_t lane) const {
         return std::uint32_t(lanes_[lane] - triangles_);
     }
+    /// Corners of the triangle in `lane`.
+    TriangleVerts corners(std::uint32_t lane) const { return *lanes_[lane]; }
     void clear() { count_ = 0; }
 
 private:
@@ -96,7 +100,8 @@ bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pr
             hit.u = group_hit.u;
             hit.v = group_hit.v;
             hit.prim_id = lanes.position(group_hit.index);
-            prefetch_hit_data(hit.prim_id);
+            prefetch_hit_data(hit.prim_id,
+                              [&lanes, lane = group_hit.index] { return lanes.corners(lane); });
             found = true;
         }
         lanes.clear();
@@ -138,10 +143,12 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
 /// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and hit.prim_id to the hit's
 /// position in leaf order (index into bvh.prim_ids and bvh.triangles), and returns true;
 /// leaves hit.instance_id to the caller.
-/// `prefetch_hit_data(position)` is called with the leaf-order position of every closer hit
-/// as it is found: the caller prefetches what it will look up for the final hit (ids in
-/// leaf order), so that the lookup's cache miss overlaps the rest of the traversal. (Asking
-/// for every visited leaf's ids instead cost more than the misses it hid.)
+/// `prefetch_hit_data(position, corners)` is called with the leaf-order position of every
+/// closer hit as it is found, and `corners()` gives that triangle's corners from the leaf
+/// data the test has just read: the caller prefetches what it will look up for the final hit
+/// (ids in leaf order), so that the lookup's cache miss overlaps the rest of the traversal,
+/// or copies the corners. (Asking for every visited leaf's ids instead cost more than the
+/// misses it hid.)
 template <class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                      Hit& hit, TraversalCounters* counters,
@@ -164,25 +171,26 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
 /// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v/prim_id (mesh primID) and
 /// returns true; leaves hit.instance_id to the caller.
-/// With `leaf_position` given, also sets it to the hit's leaf-order position and prefetches,
-/// with every closer hit, the hit triangle's corner copy (bvh.triangles), which that caller
-/// reads next.
+/// With `located` given, also sets located->leaf_position to the hit's leaf-order position
+/// and located->corners to its corners, copied as each closer hit is found from the leaf data
+/// the test had just read (that caller reads them next: from ObjectBvh::triangles they would
+/// cost a cache miss).
 inline bool intersect_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit,
-                                 TraversalCounters* counters,
-                                 std::uint32_t* leaf_position = nullptr) {
+                                 TraversalCounters* counters, HitTriangle* located = nullptr) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids;
-    const TriangleVerts* corners = leaf_position != nullptr ? bvh.triangles : nullptr;
-    const auto prefetch_hit_data = [prim_ids, corners](std::uint32_t position) {
+    const auto prefetch_hit_data = [prim_ids, located](std::uint32_t position, auto&& corners) {
         __builtin_prefetch(prim_ids + position);
-        if (corners != nullptr) __builtin_prefetch(corners + position);
+        if (located != nullptr) {
+            located->leaf_position = position;
+            located->corners = corners();
+        }
     };
     if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,
                                          prefetch_hit_data))
         return false;
     hit = leaf_order_hit;
     hit.prim_id = prim_ids[leaf_order_hit.prim_id];
-    if (leaf_position != nullptr) *leaf_position = leaf_order_hit.prim_id;
     return true;
 }
 

@@ -2,20 +2,20 @@
 
 #include <cstdint>
 
+#include "rebraid/bvh/hit_triangle.h"
 #include "rebraid/core/ray.h"
 #include "rebraid/core/types.h"
 
 namespace rebraid {
 
-/// A closest hit and where its triangle is kept: its position in the leaf order of its mesh's
-/// object BVH (index into ObjectBvh::triangles and ObjectBvh::prim_ids). For callers that read
-/// the hit triangle's corners right after the query (the Embree glue recomputes Embree's hit
-/// attributes from them): the query prefetches them with every closer hit it finds, so that
-/// their cache miss overlaps the rest of the traversal.
+/// A closest hit and its triangle: where it is kept in the leaf order of its mesh's object
+/// BVH, and its corners. For callers that recompute hit attributes from the corners right
+/// after the query (the Embree glue recomputes Embree's): the query copies them from the leaf
+/// data it has just tested as it finds each closer hit, where reading ObjectBvh::triangles
+/// afterwards would cost a cache miss.
 struct LocatedHit {
     Hit hit;
-    /// kInvalidId when the ray hits nothing.
-    std::uint32_t leaf_position = kInvalidId;
+    HitTriangle triangle;
 };
 
 }  // namespace rebraid

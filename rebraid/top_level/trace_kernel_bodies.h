@@ -29,7 +29,7 @@ inline namespace REBRAID_SIMD_NAMESPACE {
     // hit are asked for as it is found.
     const InstanceId* instances = accel.triangle_instances().data();
     const PrimId* prims = accel.triangle_prims().data();
-    const auto prefetch_ids = [instances, prims](std::uint32_t position) {
+    const auto prefetch_ids = [instances, prims](std::uint32_t position, auto&&) {
         __builtin_prefetch(instances + position);
         __builtin_prefetch(prims + position);
     };
@@ -90,10 +90,10 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
         prefetch_node(bvh.nodes, item.object_node);
 }
 
-/// The closest hit of an instanced structure; with `leaf_position` given, also where the hit
-/// triangle is kept (intersect_object_bvh).
+/// The closest hit of an instanced structure; with `located` given, also where the hit
+/// triangle is kept and its corners (intersect_object_bvh).
 inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
-                                 TraversalCounters* counters, std::uint32_t* leaf_position) {
+                                 TraversalCounters* counters, HitTriangle* located) {
     Hit hit;
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray);
@@ -108,7 +108,7 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
             if (counters) ++counters->object_entries;
             PreparedRay& object_ray = object_rays.ray_for(target);
             if (intersect_object_bvh(views[target.mesh], item.object_node, object_ray, hit,
-                                     counters, leaf_position)) {
+                                     counters, located)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -132,7 +132,7 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
 [[gnu::flatten]] inline LocatedHit instanced_intersect_located(const InstancedAccel& accel,
                                                                const Ray& ray) {
     LocatedHit located;
-    located.hit = instanced_closest_hit(accel, ray, nullptr, &located.leaf_position);
+    located.hit = instanced_closest_hit(accel, ray, nullptr, &located.triangle);
     return located;
 }
 

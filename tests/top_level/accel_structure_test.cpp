@@ -103,10 +103,10 @@ TEST(TwoLevelAccel, InstancesPlacedAlikeShareOneObjectSpace) {
     EXPECT_EQ(accel.object_views()[1].triangles, accel.object_bvhs()[1].triangles.data());
 }
 
-// intersect_located is the closest hit of intersect() and names where its triangle is kept:
-// the leaf-order position whose prim_ids entry is the hit's primID (the Embree glue reads the
-// hit's corners there), at every kernel level.
-TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesLeafPosition) {
+// intersect_located is the closest hit of intersect() and names its triangle: the leaf-order
+// position whose prim_ids entry is the hit's primID, and the corners kept there (the Embree
+// glue recomputes the hit's attributes from them), at every kernel level.
+TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesPositionAndCorners) {
     for (const test::NamedScene& named : all_scenes()) {
         for (bool rebraided : {false, true}) {
             InstancedAccel accel =
@@ -125,13 +125,20 @@ TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesLeafPosition) {
                                           hit.instance_id == located.hit.instance_id &&
                                           hit.prim_id == located.hit.prim_id &&
                                           hit.u == located.hit.u && hit.v == located.hit.v;
-                    bool located_right = located.leaf_position == kInvalidId;
+                    const HitTriangle& triangle = located.triangle;
+                    bool located_right = triangle.leaf_position == kInvalidId;
                     if (hit.is_hit()) {
                         ++hits;
                         const ObjectBvh& bvh =
                             accel.object_bvhs()[accel.instance_meshes()[hit.instance_id]];
-                        located_right = located.leaf_position < bvh.prim_ids.size() &&
-                                        bvh.prim_ids[located.leaf_position] == hit.prim_id;
+                        located_right = triangle.leaf_position < bvh.prim_ids.size() &&
+                                        bvh.prim_ids[triangle.leaf_position] == hit.prim_id;
+                        if (located_right) {
+                            const TriangleVerts& kept = bvh.triangles[triangle.leaf_position];
+                            located_right = kept.v0 == triangle.corners.v0 &&
+                                            kept.v1 == triangle.corners.v1 &&
+                                            kept.v2 == triangle.corners.v2;
+                        }
                     }
                     wrong += !(same_hit && located_right);
                 }
