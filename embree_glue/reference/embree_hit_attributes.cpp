@@ -7,16 +7,22 @@
 #define REBRAID_HAS_SSE_RCP 1
 #endif
 
-// Every product and sum below must round exactly as written: the compiler may not fuse a
-// multiply and an add on its own (this file is built with -mfma, and GCC contracts by default).
-#if defined(__clang__)
-#pragma clang fp contract(off)
-#elif defined(__GNUC__)
-#pragma GCC optimize("fp-contract=off")
-#endif
-
 namespace rebraid::glue {
 namespace {
+
+/// `x`, hidden from the optimiser: every product and sum here must round exactly as Embree's
+/// code rounds it, and the compiler may not fuse a product that feeds a sum into one
+/// multiply-add on its own (this file is built with -mfma, and GCC contracts by default).
+/// Cheaper than turning contraction off for the file, which also kept the helpers below from
+/// being inlined into the per-hit code.
+inline float rounded(float x) {
+#if defined(__x86_64__) || defined(__i386__)
+    asm("" : "+x"(x));
+#else
+    asm("" : "+g"(x));
+#endif
+    return x;
+}
 
 /// The hardware's 12-bit reciprocal estimate (rcpss), the start of Embree's reciprocal in
 /// its SSE, AVX and AVX2 kernels. The table is the CPU's own.
@@ -55,21 +61,21 @@ struct FusedRcp14Ops : FusedOps {
 
 /// Embree's multiply-adds in the SSE and AVX kernels: the product rounds, then the sum.
 struct SeparateOps {
-    static float madd(float a, float b, float c) { return a * b + c; }
-    static float msub(float a, float b, float c) { return a * b - c; }
-    static float nmadd(float a, float b, float c) { return c - a * b; }
+    static float madd(float a, float b, float c) { return rounded(a * b) + c; }
+    static float msub(float a, float b, float c) { return rounded(a * b) - c; }
+    static float nmadd(float a, float b, float c) { return c - rounded(a * b); }
     static float estimate(float x) { return reciprocal_estimate_12(x); }
 };
 
 template <typename Ops>
 Vec3f kernel_cross(Vec3f a, Vec3f b) {
-    return {Ops::msub(a.y, b.z, a.z * b.y), Ops::msub(a.z, b.x, a.x * b.z),
-            Ops::msub(a.x, b.y, a.y * b.x)};
+    return {Ops::msub(a.y, b.z, rounded(a.z * b.y)), Ops::msub(a.z, b.x, rounded(a.x * b.z)),
+            Ops::msub(a.x, b.y, rounded(a.y * b.x))};
 }
 
 template <typename Ops>
 float kernel_dot(Vec3f a, Vec3f b) {
-    return Ops::madd(a.x, b.x, Ops::madd(a.y, b.y, a.z * b.z));
+    return Ops::madd(a.x, b.x, Ops::madd(a.y, b.y, rounded(a.z * b.z)));
 }
 
 /// 1 / x as Embree's kernels compute it: the hardware estimate refined by one Newton step,
@@ -95,8 +101,8 @@ template <typename Ops>
 Vec3f kernel_transform_vector(const AffineTransform& m, Vec3f d) {
     Vec3f out;
     for (int axis = 0; axis < 3; ++axis)
-        out[axis] =
-            Ops::madd(d.x, m.col_x[axis], Ops::madd(d.y, m.col_y[axis], d.z * m.col_z[axis]));
+        out[axis] = Ops::madd(d.x, m.col_x[axis],
+                              Ops::madd(d.y, m.col_y[axis], rounded(d.z * m.col_z[axis])));
     return out;
 }
 
@@ -156,14 +162,16 @@ AffineTransform embree_world_to_object(const AffineTransform& object_to_world) {
     // Embree inverts at commit in code built for the base instruction set: no fused
     // operations, whatever the kernels use. Measured bit for bit (dropin_results.md).
     auto plain_cross = [](Vec3f a, Vec3f b) -> Vec3f {
-        return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+        return {rounded(a.y * b.z) - rounded(a.z * b.y), rounded(a.z * b.x) - rounded(a.x * b.z),
+                rounded(a.x * b.y) - rounded(a.y * b.x)};
     };
     const AffineTransform& m = object_to_world;
     const Vec3f adjugate_row_x = plain_cross(m.col_y, m.col_z);
     const Vec3f adjugate_row_y = plain_cross(m.col_z, m.col_x);
     const Vec3f adjugate_row_z = plain_cross(m.col_x, m.col_y);
-    const float det = (m.col_x.x * adjugate_row_x.x + m.col_x.y * adjugate_row_x.y) +
-                      m.col_x.z * adjugate_row_x.z;
+    const float det =
+        (rounded(m.col_x.x * adjugate_row_x.x) + rounded(m.col_x.y * adjugate_row_x.y)) +
+        rounded(m.col_x.z * adjugate_row_x.z);
     AffineTransform inverse;
     // Column j of the inverse holds component j of the adjugate's rows, each divided by det.
     for (int j = 0; j < 3; ++j) {
@@ -174,16 +182,32 @@ AffineTransform embree_world_to_object(const AffineTransform& object_to_world) {
     const Vec3f& p = m.translation;
     for (int axis = 0; axis < 3; ++axis)
         inverse.translation[axis] =
-            -(inverse.col_x[axis] * p.x + (inverse.col_y[axis] * p.y + inverse.col_z[axis] * p.z));
+            -(rounded(inverse.col_x[axis] * p.x) +
+              (rounded(inverse.col_y[axis] * p.y) + rounded(inverse.col_z[axis] * p.z)));
     return inverse;
 }
+
+namespace {
+
+/// hit_attributes<FusedRcp14Ops> compiled for AVX-512 as a whole (only called where the CPU
+/// has it), so that the 14-bit estimate and every helper inline into one body.
+#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx512f"), flatten))
+#endif
+std::optional<EmbreeHitAttributes>
+hit_attributes_rcp14(const Ray& world_ray, const AffineTransform* world_to_object,
+                     const std::array<Vec3f, 3>& corners) {
+    return hit_attributes<FusedRcp14Ops>(world_ray, world_to_object, corners);
+}
+
+}  // namespace
 
 std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
                                                          const AffineTransform* world_to_object,
                                                          const std::array<Vec3f, 3>& corners,
                                                          EmbreeKernelArithmetic arithmetic) {
     if (arithmetic == EmbreeKernelArithmetic::fused_rcp14)
-        return hit_attributes<FusedRcp14Ops>(world_ray, world_to_object, corners);
+        return hit_attributes_rcp14(world_ray, world_to_object, corners);
     if (arithmetic == EmbreeKernelArithmetic::fused)
         return hit_attributes<FusedOps>(world_ray, world_to_object, corners);
     return hit_attributes<SeparateOps>(world_ray, world_to_object, corners);
