@@ -27,6 +27,10 @@
 namespace rebraid {
 namespace {
 
+/// The rounding allowed for in misses_bounds, relative to the size of the products it
+/// subtracts: a few float epsilons, far below the box's padding.
+constexpr float kLineTestTolerance = 8.0f * 1.1920929e-07f;
+
 ObjectBvhBuilder make_object_builder(const EmbreeAccelSettings& settings) {
     if (settings.object_builder == EmbreeAccelObjectBuilder::embree)
         return glue::embree_object_bvh_builder(settings.embree_builder);
@@ -145,50 +149,55 @@ void EmbreeAccel::pad_bounds() {
     for (int a = 0; a < 3; ++a) {
         const float pad = 1e-3f * (box.max[a] - box.min[a]) +
                           1e-4f * std::max(std::abs(box.min[a]), std::abs(box.max[a])) + 1e-6f;
-        padded_min_[a] = box.min[a] - pad;
-        padded_max_[a] = box.max[a] + pad;
+        const float low = box.min[a] - pad, high = box.max[a] + pad;
+        padded_centre_[a] = 0.5f * (low + high);
+        // Rounded up, so that the box stays around [low, high] whatever the centre's rounding.
+        padded_half_[a] = 0.5f * (high - low) * (1.0f + 1e-6f);
     }
-    padded_min_[3] = -std::numeric_limits<float>::infinity();
-    padded_max_[3] = std::numeric_limits<float>::infinity();
+    padded_centre_[3] = padded_half_[3] = 0.0f;
 }
 
 bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
-    // The three slabs of the padded box. A zero direction component gives slab distances of
-    // +-inf, of the right signs when the origin is inside or outside the slab; NaN (an origin
-    // on a padded plane, or NaN in the ray) goes on to the traversal.
+    // The separating axes of a line and a box: the line misses the box exactly when, for
+    // some axis i, |((centre - org) x dir)_i| > half_j |dir_k| + half_k |dir_j| ((i, j, k)
+    // cyclic: the box seen down the line is a hexagon whose edge normals these are). No
+    // division, and a dependency chain a third as long as the slab test's, which every ray
+    // waits on here. The ray's interval is not looked at: a ray whose line crosses the box
+    // goes on to the traversal. Each product's rounding is allowed for by a few epsilons of
+    // the products' size; NaN or infinities in the ray compare false and go on as well.
 #ifdef REBRAID_GLUE_SSE
-    // RTCRay keeps (org, tnear) and (dir, time) in two groups of four floats: one load each.
-    // Lane 3 meets the planes -inf and +inf, which give it the slab (-inf, +inf) whatever
-    // tnear and time are (or NaN, sent on to the traversal).
+    // RTCRay keeps (org, tnear) and (dir, time) in two groups of four floats: one load each
+    // (lane 3 is left out of the answer).
     static_assert(offsetof(RTCRay, tnear) == 12 && offsetof(RTCRay, dir_x) == 16 &&
                   offsetof(RTCRay, time) == 28);
-    const __m128 org = _mm_loadu_ps(&ray.org_x);
-    const __m128 inverse = _mm_div_ps(_mm_set1_ps(1.0f), _mm_loadu_ps(&ray.dir_x));
-    const __m128 t0 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_min_), org), inverse);
-    const __m128 t1 = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(padded_max_), org), inverse);
-    if (_mm_movemask_ps(_mm_cmpunord_ps(t0, t1)) != 0) return false;
-    __m128 entry = _mm_min_ps(t0, t1);
-    __m128 exit = _mm_max_ps(t0, t1);
-    entry = _mm_max_ps(entry, _mm_shuffle_ps(entry, entry, _MM_SHUFFLE(1, 0, 3, 2)));
-    exit = _mm_min_ps(exit, _mm_shuffle_ps(exit, exit, _MM_SHUFFLE(1, 0, 3, 2)));
-    entry = _mm_max_ss(_mm_max_ss(entry, _mm_shuffle_ps(entry, entry, 1)), _mm_load_ss(&ray.tnear));
-    exit = _mm_min_ss(_mm_min_ss(exit, _mm_shuffle_ps(exit, exit, 1)), _mm_load_ss(&ray.tfar));
-    const float first = _mm_cvtss_f32(entry), last = _mm_cvtss_f32(exit);
+    const __m128 to_centre = _mm_sub_ps(_mm_load_ps(padded_centre_), _mm_loadu_ps(&ray.org_x));
+    const __m128 dir = _mm_loadu_ps(&ray.dir_x);
+    const auto yzx = [](__m128 v) { return _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 0, 2, 1)); };
+    const auto zxy = [](__m128 v) { return _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 1, 0, 2)); };
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    const __m128 first = _mm_mul_ps(yzx(to_centre), zxy(dir));
+    const __m128 second = _mm_mul_ps(zxy(to_centre), yzx(dir));
+    const __m128 cross = _mm_andnot_ps(sign, _mm_sub_ps(first, second));
+    const __m128 size = _mm_add_ps(_mm_andnot_ps(sign, first), _mm_andnot_ps(sign, second));
+    const __m128 abs_dir = _mm_andnot_ps(sign, dir);
+    const __m128 half = _mm_load_ps(padded_half_);
+    const __m128 reach =
+        _mm_add_ps(_mm_mul_ps(yzx(half), zxy(abs_dir)), _mm_mul_ps(zxy(half), yzx(abs_dir)));
+    const __m128 limit = _mm_add_ps(reach, _mm_mul_ps(size, _mm_set1_ps(kLineTestTolerance)));
+    return (_mm_movemask_ps(_mm_cmpgt_ps(cross, limit)) & 7) != 0;
 #else
-    const float org[3] = {ray.org_x, ray.org_y, ray.org_z};
+    const float to_centre[3] = {padded_centre_[0] - ray.org_x, padded_centre_[1] - ray.org_y,
+                                padded_centre_[2] - ray.org_z};
     const float dir[3] = {ray.dir_x, ray.dir_y, ray.dir_z};
-    float first = ray.tnear, last = ray.tfar;
-    for (int a = 0; a < 3; ++a) {
-        const float inverse = 1.0f / dir[a];
-        const float t0 = (padded_min_[a] - org[a]) * inverse;
-        const float t1 = (padded_max_[a] - org[a]) * inverse;
-        if (std::isnan(t0) || std::isnan(t1)) return false;
-        first = std::max(first, std::min(t0, t1));
-        last = std::min(last, std::max(t0, t1));
+    for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3, k = (i + 2) % 3;
+        const float first = to_centre[j] * dir[k], second = to_centre[k] * dir[j];
+        const float reach = padded_half_[j] * std::abs(dir[k]) + padded_half_[k] * std::abs(dir[j]);
+        const float limit = reach + (std::abs(first) + std::abs(second)) * kLineTestTolerance;
+        if (std::abs(first - second) > limit) return true;
     }
+    return false;
 #endif
-    // Each slab distance is within a few ulps of exact: a miss only by more than that.
-    return first - last > 1e-5f * (std::abs(first) + std::abs(last));
 }
 
 void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {

@@ -125,7 +125,8 @@ private:
     /// Conversion of the scene as the registry sees it now.
     glue::ConvertedEmbreeScene convert_now() const;
     void pad_bounds();
-    /// True when `ray` certainly misses every triangle: it misses the padded scene bounds.
+    /// True when `ray` certainly misses every triangle: its line misses the padded scene
+    /// bounds.
     bool misses_bounds(const RTCRay& ray) const noexcept;
     /// intersect1 for an active ray that may hit something. Out of line, so that the rays
     /// intersect1 turns away (most of a frame that frames a whole scene) return without
@@ -141,11 +142,11 @@ private:
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;
-    /// The top level's box with a margin (x, y, z, then -inf and +inf): rays that miss it
-    /// return before the traversal (most rays of a frame framing a whole scene miss every
-    /// object).
-    alignas(16) float padded_min_[4] = {};
-    alignas(16) float padded_max_[4] = {};
+    /// The top level's box with a margin, as its centre and half extents (x, y, z, then 0):
+    /// rays whose line misses it return before the traversal (most rays of a frame framing a
+    /// whole scene miss every object).
+    alignas(16) float padded_centre_[4] = {};
+    alignas(16) float padded_half_[4] = {};
     /// index = InstanceId: Embree's world-to-object map of the instance (its float inverse of
     /// the registered transform, rounded as Embree rounds it); unused for root-scene meshes.
     std::vector<AffineTransform> embree_world_to_object_;

@@ -312,9 +312,9 @@ TEST(EmbreeAccel, UpdateAfterAttachingAndDisablingRebuildsAndMatchesEmbree) {
     expect_accel_matches_embree(embree_scene->top, accel, 6);
 }
 
-// Rays that miss the padded scene bounds return before the traversal: the rays that test that
-// early exit's edges. From far away (up to 1,000 diagonals) aimed at the centres of the scene's
-// triangles, which they must reach; starting just inside a face of the scene's box and
+// Rays whose line misses the padded scene bounds return before the traversal: the rays that
+// test that early exit's edges. From far away (up to 1,000 diagonals) aimed at the centres of the
+// scene's triangles, which they must reach; starting just inside a face of the scene's box and
 // running parallel to it (zero direction components); with tiny direction components; and aimed
 // just past the box's corners.
 TEST(EmbreeAccel, RaysNearAndFarFromTheSceneBoundsMatchEmbree) {
