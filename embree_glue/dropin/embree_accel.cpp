@@ -210,10 +210,36 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     intersect_within_bounds(rayhit);
 }
 
+/// Embree's attributes of each closer hit, computed as the query finds it (the last one
+/// computed is the closest hit's): that work then overlaps the rest of the traversal instead
+/// of following it.
+struct EmbreeAccel::PendingAttributes {
+    const EmbreeAccel& accel;
+    const Ray& ray;
+    std::optional<glue::EmbreeHitAttributes> attributes;
+
+    static void on_closer_hit(void* context, InstanceId instance, const HitTriangle& triangle) {
+        auto& pending = *static_cast<PendingAttributes*>(context);
+        const EmbreeAccel& accel = pending.accel;
+        const TriangleVerts& corners = triangle.corners;
+        // Our traversal finds the triangle and t; the reported attributes are computed again
+        // the way Embree computes them (its world-to-object map, its kernel's rounding), so
+        // that they agree with rtcIntersect1 to the last bit where Embree finds the same
+        // triangle.
+        const bool is_instanced =
+            accel.converted_.instance_ids[instance].inst_id != RTC_INVALID_GEOMETRY_ID;
+        pending.attributes = glue::embree_hit_attributes(
+            pending.ray, is_instanced ? &accel.embree_world_to_object_[instance] : nullptr,
+            {corners.v0, corners.v1, corners.v2}, accel.arithmetic_);
+    }
+};
+
 void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
     const RTCRay& in = rayhit.ray;
     const Ray ray = glue::from_embree_ray(in);
-    const LocatedHit located = accel_->intersect_located(ray);
+    PendingAttributes pending{*this, ray, std::nullopt};
+    const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
+    const LocatedHit located = accel_->intersect_located(ray, &observer);
     const Hit& hit = located.hit;
     if (!hit.is_hit()) return;
     const glue::EmbreeHitIds& ids = converted_.instance_ids[hit.instance_id];
@@ -221,13 +247,7 @@ void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
     // vertex arrays, or the object BVH's corner copy, would cost cache misses).
     const TriangleVerts& triangle = located.triangle.corners;
     const std::array<Vec3f, 3> corners = {triangle.v0, triangle.v1, triangle.v2};
-    // Our traversal found the triangle and t; the reported attributes are computed again the
-    // way Embree computes them (its world-to-object map, its kernel's rounding), so that they
-    // agree with rtcIntersect1 to the last bit where Embree finds the same triangle.
-    const bool is_instanced = ids.inst_id != RTC_INVALID_GEOMETRY_ID;
-    const std::optional<glue::EmbreeHitAttributes> embree_hit = glue::embree_hit_attributes(
-        ray, is_instanced ? &embree_world_to_object_[hit.instance_id] : nullptr, corners,
-        arithmetic_);
+    const std::optional<glue::EmbreeHitAttributes>& embree_hit = pending.attributes;
     float t = hit.t, u = hit.u, v = hit.v;
     Vec3f normal;
     if (embree_hit) {

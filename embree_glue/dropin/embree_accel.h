@@ -132,6 +132,8 @@ private:
     /// intersect1 turns away (most of a frame that frames a whole scene) return without
     /// paying for the traversal's registers and stack.
     [[gnu::noinline]] void intersect_within_bounds(RTCRayHit& rayhit) const noexcept;
+    /// Embree's attributes of each closer hit as the traversal finds it (embree_accel.cpp).
+    struct PendingAttributes;
 
     RTCScene scene_ = nullptr;
     EmbreeAccelSettings settings_;

@@ -174,16 +174,19 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 /// With `located` given, also sets located->leaf_position to the hit's leaf-order position
 /// and located->corners to its corners, copied as each closer hit is found from the leaf data
 /// the test had just read (that caller reads them next: from ObjectBvh::triangles they would
-/// cost a cache miss).
-inline bool intersect_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit,
-                                 TraversalCounters* counters, HitTriangle* located = nullptr) {
+/// cost a cache miss), and then calls `on_closer_hit(*located)`.
+template <class OnCloserHit = void (*)(const HitTriangle&)>
+bool intersect_object_bvh(
+    ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit, TraversalCounters* counters,
+    HitTriangle* located = nullptr, OnCloserHit&& on_closer_hit = [](const HitTriangle&) {}) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids;
-    const auto prefetch_hit_data = [prim_ids, located](std::uint32_t position, auto&& corners) {
+    const auto prefetch_hit_data = [&](std::uint32_t position, auto&& corners) {
         __builtin_prefetch(prim_ids + position);
         if (located != nullptr) {
             located->leaf_position = position;
             located->corners = corners();
+            on_closer_hit(*located);
         }
     };
     if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,

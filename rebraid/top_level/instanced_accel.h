@@ -37,10 +37,12 @@ public:
     Hit intersect_counted(const Ray& ray, TraversalCounters* counters) const override;
     bool occluded(const Ray& ray) const override;
     AccelStats stats() const override;
-    /// The closest hit, as intersect(), and where its triangle's corners are kept. Inline:
-    /// the Embree glue calls it for every ray.
-    LocatedHit intersect_located(const Ray& ray) const {
-        return kernels_->instanced_intersect_located(*this, ray);
+    /// The closest hit, as intersect(), and its triangle (where it is kept, its corners);
+    /// `observer`, when given, hears of every closer hit as it is found. Inline: the Embree
+    /// glue calls it for every ray.
+    LocatedHit intersect_located(const Ray& ray,
+                                 const CloserHitObserver* observer = nullptr) const {
+        return kernels_->instanced_intersect_located(*this, ray, observer);
     }
 
     const TopLevelBvh& top_level() const { return top_; }

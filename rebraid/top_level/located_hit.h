@@ -18,4 +18,13 @@ struct LocatedHit {
     HitTriangle triangle;
 };
 
+/// Told of every closer hit a located query finds, as it finds it (the last call names the
+/// closest hit): a caller that computes something from the hit triangle can start while the
+/// traversal goes on, instead of after it.
+struct CloserHitObserver {
+    void (*on_closer_hit)(void* context, InstanceId instance,
+                          const HitTriangle& triangle) = nullptr;
+    void* context = nullptr;
+};
+
 }  // namespace rebraid

@@ -91,9 +91,11 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
 }
 
 /// The closest hit of an instanced structure; with `located` given, also where the hit
-/// triangle is kept and its corners (intersect_object_bvh).
+/// triangle is kept and its corners (intersect_object_bvh), and `observer` (when not null)
+/// told of each closer hit.
 inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
-                                 TraversalCounters* counters, HitTriangle* located) {
+                                 TraversalCounters* counters, HitTriangle* located,
+                                 const CloserHitObserver* observer = nullptr) {
     Hit hit;
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray);
@@ -107,8 +109,12 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
             const InstanceTarget& target = targets[item.instance_id];
             if (counters) ++counters->object_entries;
             PreparedRay& object_ray = object_rays.ray_for(target);
+            const auto on_closer_hit = [observer, &item](const HitTriangle& triangle) {
+                if (observer != nullptr)
+                    observer->on_closer_hit(observer->context, item.instance_id, triangle);
+            };
             if (intersect_object_bvh(views[target.mesh], item.object_node, object_ray, hit,
-                                     counters, located)) {
+                                     counters, located, on_closer_hit)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -130,9 +136,10 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
 }
 
 [[gnu::flatten]] inline LocatedHit instanced_intersect_located(const InstancedAccel& accel,
-                                                               const Ray& ray) {
+                                                               const Ray& ray,
+                                                               const CloserHitObserver* observer) {
     LocatedHit located;
-    located.hit = instanced_closest_hit(accel, ray, nullptr, &located.triangle);
+    located.hit = instanced_closest_hit(accel, ray, nullptr, &located.triangle, observer);
     return located;
 }
 

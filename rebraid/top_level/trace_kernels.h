@@ -19,7 +19,8 @@ struct TraceKernels {
     Hit (*instanced_intersect)(const InstancedAccel& accel, const Ray& ray,
                                TraversalCounters* counters);
     bool (*instanced_occluded)(const InstancedAccel& accel, const Ray& ray);
-    LocatedHit (*instanced_intersect_located)(const InstancedAccel& accel, const Ray& ray);
+    LocatedHit (*instanced_intersect_located)(const InstancedAccel& accel, const Ray& ray,
+                                              const CloserHitObserver* observer);
 };
 
 /// The kernels of `level`. Throws rebraid::Error when this build or this CPU cannot run it.

@@ -149,6 +149,65 @@ TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesPositionAndCorner
     }
 }
 
+/// What a CloserHitObserver heard: how often, and the last call's instance and triangle.
+struct HeardHits {
+    std::size_t calls = 0;
+    InstanceId instance = kInvalidId;
+    HitTriangle triangle;
+
+    static void on_closer_hit(void* context, InstanceId instance, const HitTriangle& triangle) {
+        auto& heard = *static_cast<HeardHits*>(context);
+        ++heard.calls;
+        heard.instance = instance;
+        heard.triangle = triangle;
+    }
+};
+
+// The observer of a located query hears of each closer hit as it is found; the last call
+// names the closest hit's instance and triangle (the Embree glue computes the attributes it
+// reports there), and a ray that hits nothing is never heard of.
+TEST(InstancedAccel, ObserverHearsEveryCloserHitAndLastTheClosest) {
+    for (const test::NamedScene& named : all_scenes()) {
+        for (bool rebraided : {false, true}) {
+            InstancedAccel accel =
+                rebraided ? build_rebraid_accel(named.scene) : build_two_level_accel(named.scene);
+            const std::vector<Ray> rays = test::varied_rays(accel, named.scene.bounds(), 2000, 9);
+            for (SimdLevel level : runnable_simd_levels()) {
+                SCOPED_TRACE(named.name + (rebraided ? " / rebraid / " : " / twolevel / ") +
+                             std::string(simd_level_name(level)));
+                accel.set_simd_level(level);
+                std::size_t hits = 0, wrong = 0, calls = 0;
+                for (const Ray& ray : rays) {
+                    HeardHits heard;
+                    const CloserHitObserver observer{&HeardHits::on_closer_hit, &heard};
+                    const LocatedHit located = accel.intersect_located(ray, &observer);
+                    const LocatedHit unobserved = accel.intersect_located(ray);
+                    bool right = std::bit_cast<std::uint32_t>(located.hit.t) ==
+                                     std::bit_cast<std::uint32_t>(unobserved.hit.t) &&
+                                 located.hit.prim_id == unobserved.hit.prim_id &&
+                                 located.hit.instance_id == unobserved.hit.instance_id;
+                    if (located.hit.is_hit()) {
+                        ++hits;
+                        calls += heard.calls;
+                        right = right && heard.calls >= 1 &&
+                                heard.instance == located.hit.instance_id &&
+                                heard.triangle.leaf_position == located.triangle.leaf_position &&
+                                heard.triangle.corners.v0 == located.triangle.corners.v0 &&
+                                heard.triangle.corners.v1 == located.triangle.corners.v1 &&
+                                heard.triangle.corners.v2 == located.triangle.corners.v2;
+                    } else {
+                        right = right && heard.calls == 0;
+                    }
+                    wrong += !right;
+                }
+                EXPECT_EQ(wrong, 0u);
+                EXPECT_GT(hits, rays.size() / 50);
+                EXPECT_GE(calls, hits);
+            }
+        }
+    }
+}
+
 TEST(TwoLevelAccel, ManyInstancesPlacedAlikeShareTheSpaceOfTheFirst) {
     // 20,000 instances cycling through 7 placements (the identity among them): the records
     // are made in parallel, and each run of equal transforms spans many of its ranges.
