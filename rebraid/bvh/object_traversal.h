@@ -13,7 +13,7 @@
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
-/// A closer-hit observer that does nothing (intersect_object_bvh_leaf_order's default).
+/// A closer-hit callback that does nothing (intersect_object_bvh_leaf_order's default).
 struct NoHitDataPrefetch {
     template <class Corners>
     void operator()(std::uint32_t, Corners&&) const {}
