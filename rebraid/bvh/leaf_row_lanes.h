@@ -64,15 +64,12 @@ public:
     }
     /// Leaf-order position of the triangle in `lane`.
     std::uint32_t position(std::uint32_t lane) const {
-        std::uint32_t s = segment_count_ - 1;
-        while (segments_[s].lane > lane) --s;
-        return segments_[s].position + (lane - segments_[s].lane);
+        const Segment& segment = segment_of(lane);
+        return segment.position + (lane - segment.lane);
     }
     /// Corners of the triangle in `lane`, from its rows.
     TriangleVerts corners(std::uint32_t lane) const {
-        std::uint32_t s = segment_count_ - 1;
-        while (segments_[s].lane > lane) --s;
-        const Segment& segment = segments_[s];
+        const Segment& segment = segment_of(lane);
         const float* first = segment.base + (lane - segment.lane);
         TriangleVerts out;
         static_assert(sizeof(TriangleVerts) == 9 * sizeof(float));
@@ -89,6 +86,12 @@ private:
         const float* base;
         std::uint32_t stride, lane, position;
     };
+    /// The segment whose lanes hold `lane` (the last one starting at or before it).
+    const Segment& segment_of(std::uint32_t lane) const {
+        std::uint32_t s = segment_count_ - 1;
+        while (segments_[s].lane > lane) --s;
+        return segments_[s];
+    }
     /// Sign bits set from index 8 on: 8 floats read from kLanesFrom + 8 - k select lanes k..7.
     static constexpr float kLanesFrom[16] = {
         0, 0, 0, 0, 0, 0, 0, 0, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f};

@@ -103,50 +103,61 @@ TEST(TwoLevelAccel, InstancesPlacedAlikeShareOneObjectSpace) {
     EXPECT_EQ(accel.object_views()[1].triangles, accel.object_bvhs()[1].triangles.data());
 }
 
-// intersect_located is the closest hit of intersect() and names its triangle: the leaf-order
-// position whose prim_ids entry is the hit's primID, and the corners kept there (the Embree
-// glue recomputes the hit's attributes from them), at every kernel level.
-TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesPositionAndCorners) {
+/// Calls check(accel, rays) for the two-level and the re-braided structure of every test
+/// scene, at every kernel level this machine runs, on 2,000 varied rays of `ray_seed`.
+template <class Check>
+void for_each_instanced_accel_and_level(std::uint64_t ray_seed, Check&& check) {
     for (const test::NamedScene& named : all_scenes()) {
         for (bool rebraided : {false, true}) {
             InstancedAccel accel =
                 rebraided ? build_rebraid_accel(named.scene) : build_two_level_accel(named.scene);
-            const std::vector<Ray> rays = test::varied_rays(accel, named.scene.bounds(), 2000, 7);
+            const std::vector<Ray> rays =
+                test::varied_rays(accel, named.scene.bounds(), 2000, ray_seed);
             for (SimdLevel level : runnable_simd_levels()) {
                 SCOPED_TRACE(named.name + (rebraided ? " / rebraid / " : " / twolevel / ") +
                              std::string(simd_level_name(level)));
                 accel.set_simd_level(level);
-                std::size_t hits = 0, wrong = 0;
-                for (const Ray& ray : rays) {
-                    const Hit hit = accel.intersect(ray);
-                    const LocatedHit located = accel.intersect_located(ray);
-                    const bool same_hit = std::bit_cast<std::uint32_t>(hit.t) ==
-                                              std::bit_cast<std::uint32_t>(located.hit.t) &&
-                                          hit.instance_id == located.hit.instance_id &&
-                                          hit.prim_id == located.hit.prim_id &&
-                                          hit.u == located.hit.u && hit.v == located.hit.v;
-                    const HitTriangle& triangle = located.triangle;
-                    bool located_right = triangle.leaf_position == kInvalidId;
-                    if (hit.is_hit()) {
-                        ++hits;
-                        const ObjectBvh& bvh =
-                            accel.object_bvhs()[accel.instance_meshes()[hit.instance_id]];
-                        located_right = triangle.leaf_position < bvh.prim_ids.size() &&
-                                        bvh.prim_ids[triangle.leaf_position] == hit.prim_id;
-                        if (located_right) {
-                            const TriangleVerts& kept = bvh.triangles[triangle.leaf_position];
-                            located_right = kept.v0 == triangle.corners.v0 &&
-                                            kept.v1 == triangle.corners.v1 &&
-                                            kept.v2 == triangle.corners.v2;
-                        }
-                    }
-                    wrong += !(same_hit && located_right);
-                }
-                EXPECT_EQ(wrong, 0u);
-                EXPECT_GT(hits, rays.size() / 50);  // the check saw hits
+                check(accel, rays);
             }
         }
     }
+}
+
+bool same_corners(const TriangleVerts& a, const TriangleVerts& b) {
+    return a.v0 == b.v0 && a.v1 == b.v1 && a.v2 == b.v2;
+}
+
+// intersect_located is the closest hit of intersect() and names its triangle: the leaf-order
+// position whose prim_ids entry is the hit's primID, and the corners kept there (the Embree
+// glue recomputes the hit's attributes from them), at every kernel level.
+TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesPositionAndCorners) {
+    for_each_instanced_accel_and_level(
+        7, [](const InstancedAccel& accel, const std::vector<Ray>& rays) {
+            std::size_t hits = 0, wrong = 0;
+            for (const Ray& ray : rays) {
+                const Hit hit = accel.intersect(ray);
+                const LocatedHit located = accel.intersect_located(ray);
+                const bool same_hit = std::bit_cast<std::uint32_t>(hit.t) ==
+                                          std::bit_cast<std::uint32_t>(located.hit.t) &&
+                                      hit.instance_id == located.hit.instance_id &&
+                                      hit.prim_id == located.hit.prim_id &&
+                                      hit.u == located.hit.u && hit.v == located.hit.v;
+                const HitTriangle& triangle = located.triangle;
+                bool located_right = triangle.leaf_position == kInvalidId;
+                if (hit.is_hit()) {
+                    ++hits;
+                    const ObjectBvh& bvh =
+                        accel.object_bvhs()[accel.instance_meshes()[hit.instance_id]];
+                    located_right =
+                        triangle.leaf_position < bvh.prim_ids.size() &&
+                        bvh.prim_ids[triangle.leaf_position] == hit.prim_id &&
+                        same_corners(bvh.triangles[triangle.leaf_position], triangle.corners);
+                }
+                wrong += !(same_hit && located_right);
+            }
+            EXPECT_EQ(wrong, 0u);
+            EXPECT_GT(hits, rays.size() / 50);  // the check saw hits
+        });
 }
 
 /// What a CloserHitObserver heard: how often, and the last call's instance and triangle.
@@ -167,45 +178,33 @@ struct HeardHits {
 // names the closest hit's instance and triangle (the Embree glue computes the attributes it
 // reports there), and a ray that hits nothing is never heard of.
 TEST(InstancedAccel, ObserverHearsEveryCloserHitAndLastTheClosest) {
-    for (const test::NamedScene& named : all_scenes()) {
-        for (bool rebraided : {false, true}) {
-            InstancedAccel accel =
-                rebraided ? build_rebraid_accel(named.scene) : build_two_level_accel(named.scene);
-            const std::vector<Ray> rays = test::varied_rays(accel, named.scene.bounds(), 2000, 9);
-            for (SimdLevel level : runnable_simd_levels()) {
-                SCOPED_TRACE(named.name + (rebraided ? " / rebraid / " : " / twolevel / ") +
-                             std::string(simd_level_name(level)));
-                accel.set_simd_level(level);
-                std::size_t hits = 0, wrong = 0, calls = 0;
-                for (const Ray& ray : rays) {
-                    HeardHits heard;
-                    const CloserHitObserver observer{&HeardHits::on_closer_hit, &heard};
-                    const LocatedHit located = accel.intersect_located(ray, &observer);
-                    const LocatedHit unobserved = accel.intersect_located(ray);
-                    bool right = std::bit_cast<std::uint32_t>(located.hit.t) ==
-                                     std::bit_cast<std::uint32_t>(unobserved.hit.t) &&
-                                 located.hit.prim_id == unobserved.hit.prim_id &&
-                                 located.hit.instance_id == unobserved.hit.instance_id;
-                    if (located.hit.is_hit()) {
-                        ++hits;
-                        calls += heard.calls;
-                        right = right && heard.calls >= 1 &&
-                                heard.instance == located.hit.instance_id &&
-                                heard.triangle.leaf_position == located.triangle.leaf_position &&
-                                heard.triangle.corners.v0 == located.triangle.corners.v0 &&
-                                heard.triangle.corners.v1 == located.triangle.corners.v1 &&
-                                heard.triangle.corners.v2 == located.triangle.corners.v2;
-                    } else {
-                        right = right && heard.calls == 0;
-                    }
-                    wrong += !right;
-                }
-                EXPECT_EQ(wrong, 0u);
-                EXPECT_GT(hits, rays.size() / 50);
-                EXPECT_GE(calls, hits);
+    for_each_instanced_accel_and_level(9, [](const InstancedAccel& accel,
+                                             const std::vector<Ray>& rays) {
+        std::size_t hits = 0, wrong = 0, calls = 0;
+        for (const Ray& ray : rays) {
+            HeardHits heard;
+            const CloserHitObserver observer{&HeardHits::on_closer_hit, &heard};
+            const LocatedHit located = accel.intersect_located(ray, &observer);
+            const LocatedHit unobserved = accel.intersect_located(ray);
+            bool right = std::bit_cast<std::uint32_t>(located.hit.t) ==
+                             std::bit_cast<std::uint32_t>(unobserved.hit.t) &&
+                         located.hit.prim_id == unobserved.hit.prim_id &&
+                         located.hit.instance_id == unobserved.hit.instance_id;
+            if (located.hit.is_hit()) {
+                ++hits;
+                calls += heard.calls;
+                right = right && heard.calls >= 1 && heard.instance == located.hit.instance_id &&
+                        heard.triangle.leaf_position == located.triangle.leaf_position &&
+                        same_corners(heard.triangle.corners, located.triangle.corners);
+            } else {
+                right = right && heard.calls == 0;
             }
+            wrong += !right;
         }
-    }
+        EXPECT_EQ(wrong, 0u);
+        EXPECT_GT(hits, rays.size() / 50);
+        EXPECT_GE(calls, hits);
+    });
 }
 
 TEST(TwoLevelAccel, ManyInstancesPlacedAlikeShareTheSpaceOfTheFirst) {
