@@ -8,6 +8,7 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
@@ -369,58 +370,38 @@ struct TrackedBuild {
 };
 
 /// Whether a build needs its cost. The cost guard compares a build that opened something;
-/// the budget search compares one that filled its budget, which without opening only a
-/// budget of 0 does. A first build that did neither is compared with nothing, and at a
-/// million instances the sum over the budget's slots was a pass of its own.
+/// the budget search compares one that used budget_search_min_use of its budget, which
+/// without opening only a budget of 0 or a least use of 0 does. A first build that did
+/// neither is compared with nothing, and at a million instances the sum over the budget's
+/// slots was a pass of its own.
 enum class CostNeed { none, if_compared, always };
 
 TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
                                 CostNeed cost_need);
 
-/// The part of a top level's SAH cost (unnormalised) its own nodes and items make: the
-/// inner nodes' half areas and each item's box area, times its triangles for a leaf item.
-double top_level_own_cost(const TopLevelBvh& top) {
-    double cost = top_inner_cost(top);
-    for (std::size_t i = 0; i < top.items.size(); ++i) {
-        const NodeRef node = top.items[i].object_node;
-        cost += double(top.item_bounds[i].half_area()) * (node.is_leaf() ? node.prim_count() : 1);
-    }
-    return cost;
-}
-
 /// The budget search (RebraidSettings::budget_doublings): `first` is the tracked build at the
-/// rule's budget; builds with the budget doubled follow while each lowers the exact cost by
-/// at least budget_search_min_gain and fills at least budget_search_min_use of its budget, and
-/// the cheapest build is returned. The budgets tried and
-/// the costs compared depend on the input only, so the choice is the same on any thread count.
-TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSettings& settings,
-                                   TrackedBuild first) {
-    TrackedBuild best = std::move(first);
-    RebraidSettings larger = settings;
-    std::uint64_t last_budget = best.build.budget;
+/// rule's budget; when it filled at least budget_search_min_use of that budget, the same
+/// instances are built again with the budget doubled budget_doublings times, and the cheaper
+/// of the two builds is returned. The budgets tried and the costs compared depend on the input
+/// only, so the choice is the same on any thread count.
+TrackedBuild search_larger_budget(const RebraidInputs& inputs, const RebraidSettings& settings,
+                                  TrackedBuild first) {
     const std::uint64_t seeds = inputs.seeded.size();
-    const auto fills_its_budget = [&](const RebraidBuild& build) {
-        return double(build.brefs - seeds) >=
-               double(settings.budget_search_min_use) * double(build.budget);
-    };
-    if (!fills_its_budget(best.build)) return best;
-    for (std::uint32_t step = 0; step < settings.budget_doublings; ++step) {
-        // Both rules' budgets double, so `larger` doubles whichever of them it takes.
-        larger.budget_factor *= 2.0f;
-        larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref * 0.5f);
-        TrackedBuild candidate = build_rebraid_once(inputs, larger, CostNeed::always);
-        // The caps (every primitive a BRef, max_budget) stop the budget from growing.
-        if (candidate.build.budget <= last_budget) break;
-        last_budget = candidate.build.budget;
-        // The tracked costs are exact up to a constant, so the gain is measured against the
-        // part of the cost a top level owns (its nodes and the boxes that enter the objects).
-        const bool is_worth_doubling_again =
-            best.cost - candidate.cost >=
-            double(settings.budget_search_min_gain) * top_level_own_cost(best.build.top);
-        if (candidate.cost < best.cost) best = std::move(candidate);
-        if (!is_worth_doubling_again || !fills_its_budget(candidate.build)) break;
-    }
-    return best;
+    // The same test as build_rebraid_once's for whether the first build's cost was taken.
+    const double used = double(first.build.brefs - seeds);
+    if (used < double(settings.budget_search_min_use) * double(first.build.budget)) return first;
+    // Both rules' budgets grow by the same factor, so `larger` multiplies whichever it takes.
+    RebraidSettings larger = settings;
+    const float factor = std::ldexp(1.0f, int(settings.budget_doublings));
+    larger.budget_factor *= factor;
+    larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref / factor);
+    // The caps (every primitive a BRef, max_budget, the item limit) may leave no larger
+    // budget to try.
+    const std::uint64_t larger_budget =
+        std::min(bref_budget(larger, seeds, inputs.primitive_count), NodeRef::kMaxFirst - seeds);
+    if (larger_budget <= first.build.budget) return first;
+    TrackedBuild candidate = build_rebraid_once(inputs, larger, CostNeed::always);
+    return candidate.cost < first.cost ? std::move(candidate) : std::move(first);
 }
 
 }  // namespace
@@ -450,7 +431,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
         rebraid_inputs(scene, object_bvhs, instances, settings, is_guarded || is_searching);
     TrackedBuild result = build_rebraid_once(
         inputs, settings, is_guarded || is_searching ? CostNeed::if_compared : CostNeed::none);
-    if (is_searching) result = search_larger_budgets(inputs, settings, std::move(result));
+    if (is_searching) result = search_larger_budget(inputs, settings, std::move(result));
     if (is_guarded && result.build.opened > 0) {
         // The opening rules estimate; the guard measures: the same instances without any
         // opening, kept when its exact cost is not higher.
@@ -547,7 +528,10 @@ TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettin
     result.brefs = top.items.size();
     result.opened = policy.opened();
     TrackedBuild tracked{std::move(result), 0.0};
-    const bool may_be_compared = tracked.build.opened > 0 || tracked.build.budget == 0;
+    const bool may_be_compared =
+        tracked.build.opened > 0 ||
+        double(tracked.build.brefs - n) >=
+            double(settings.budget_search_min_use) * double(tracked.build.budget);
     if (cost_need == CostNeed::always || (cost_need == CostNeed::if_compared && may_be_compared))
         tracked.cost = cost_above_objects(tracked.build.top, item_slots, node_cost, removed_cost);
     return tracked;

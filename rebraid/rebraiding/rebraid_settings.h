@@ -52,26 +52,23 @@ struct RebraidSettings {
     /// Instanced primitives per extra BRef under BudgetRule::per_primitive and larger (paper
     /// §5.2: 1000).
     float primitives_per_bref = 1000.0f;
-    /// Budget search: after the build at the rule's budget, build
-    /// again with the budget doubled, up to this many times, and keep the build of lowest
-    /// exact SAH cost (rebraid_cost_guard.h); stop doubling once a doubling lowers the cost by
-    /// less than `budget_search_min_gain` or leaves its budget partly unused
-    /// (`budget_search_min_use`). 0 builds once, at the rule's budget. Each step costs one
-    /// more top-level build of twice the items. The paper notes that subtrees may run out of
-    /// budget where objects overlap deep down (§7); on the shared scenes where the rule's
-    /// budget was spent in full (brainstem, cg57_cruiser, powerplant) two doublings traced
-    /// 4-23 % faster for 2-9 ms more top build (bench/RESULTS.md), and a third cut their
-    /// instructions per diffuse ray by 2.8, 3.4 and 14 % for 2.7-19 ms more (callgrind;
-    /// per-frame tops of DynamicSceneAccel search no budgets). Where a doubling no longer pays
-    /// (fzk_haus, crown, the forests) the search stops by itself.
+    /// Budget search: when the build at the rule's budget spent it (see
+    /// `budget_search_min_use`), build once more with the budget doubled this many times
+    /// (x8 for 3) and keep the build of lower exact SAH cost (rebraid_cost_guard.h). 0 builds
+    /// once, at the rule's budget. The paper notes that subtrees may run out of budget where
+    /// objects overlap deep down (§7); on the shared scenes where the rule's budget was spent
+    /// in full (brainstem, cg57_cruiser, powerplant) each doubling up to x8 lowered the cost
+    /// (by 2-24 % of the part the top level's own nodes and boxes make); x4 traced 4-23 %
+    /// faster than x1 (bench/RESULTS.md) and x8 cut the instructions per diffuse ray by a
+    /// further 2.8, 3.4 and 14 % (callgrind). One build at x8 gives that tree for the price of
+    /// its own build, where building at x2, x4 and x8 in turn cost about twice as much
+    /// (docs/design.md).
+    /// Per-frame tops of DynamicSceneAccel search no budgets.
     std::uint32_t budget_doublings = 3;
-    /// Least cost reduction for the budget search to double again, relative to the part of
-    /// the SAH cost the top level itself makes (its nodes and the boxes entering objects).
-    float budget_search_min_gain = 0.01f;
-    /// The budget search doubles only after a build that filled at least this fraction of its
-    /// budget: a build that left free space unused was not held back by its budget, and where
-    /// nothing opens (forests, cities) a doubling would only repeat the build. 0 doubles
-    /// whatever the use.
+    /// The budget search builds again only after a build that filled at least this fraction of
+    /// its budget: a build that left free space unused was not held back by its budget, and
+    /// where nothing opens (forests, cities) a larger budget would only repeat the build. 0
+    /// searches whatever the use.
     float budget_search_min_use = 0.95f;
     /// Hard cap on the extra BRefs, whatever the rule gives: the BRef array (40 bytes per
     /// BRef, plus as much again of build scratch) is allocated in full before the build
