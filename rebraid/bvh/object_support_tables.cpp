@@ -1,22 +1,38 @@
 #include "rebraid/bvh/object_support_tables.h"
 
-#include <tbb/parallel_for.h>
-
 namespace rebraid {
 
-ObjectSupportTables::ObjectSupportTables(const ObjectBvh& bvh) {
+ObjectSupportTables::ObjectSupportTables(const ObjectBvh& bvh) : bvh_(&bvh) {
     if (bvh.root.is_empty()) return;
-    std::vector<std::pair<NodeRef, BBox3f>> nodes{{bvh.root, bvh.bounds}};
-    if (bvh.root.is_inner()) {
-        const WideNode& root = bvh.nodes[bvh.root.node_id()];
-        for (int c = 0; c < kBvhWidth && !root.children[c].is_empty(); ++c)
-            if (root.children[c].is_inner())
-                nodes.push_back({root.children[c], root.child_bounds(c)});
+    std::size_t count = 1;
+    const WideNode* root = bvh.root.is_inner() ? &bvh.nodes[bvh.root.node_id()] : nullptr;
+    if (root)
+        for (int c = 0; c < kBvhWidth && !root->children[c].is_empty(); ++c)
+            count += root->children[c].is_inner() ? 1 : 0;
+    entries_ = std::make_unique<Entry[]>(count);
+    entry_count_ = count;
+    entries_[0].node = bvh.root;
+    entries_[0].box = bvh.bounds;
+    std::size_t k = 1;
+    if (root)
+        for (int c = 0; c < kBvhWidth && !root->children[c].is_empty(); ++c)
+            if (root->children[c].is_inner()) {
+                entries_[k].node = root->children[c];
+                entries_[k].box = root->child_bounds(c);
+                ++k;
+            }
+    find(bvh.root);  // every instance asks for it
+}
+
+const SupportTable* ObjectSupportTables::find(NodeRef node) const {
+    for (std::size_t k = 0; k < entry_count_; ++k) {
+        const Entry& entry = entries_[k];
+        if (!(entry.node == node)) continue;
+        std::call_once(entry.made,
+                       [&] { entry.table = SupportTable(*bvh_, entry.node, entry.box); });
+        return &entry.table;
     }
-    tables_.resize(nodes.size());
-    tbb::parallel_for(std::size_t(0), nodes.size(), [&](std::size_t k) {
-        tables_[k] = {nodes[k].first, SupportTable(bvh, nodes[k].first, nodes[k].second)};
-    });
+    return nullptr;
 }
 
 }  // namespace rebraid
