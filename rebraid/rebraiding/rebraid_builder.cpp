@@ -1,5 +1,6 @@
 #include "rebraid/rebraiding/rebraid_builder.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -300,10 +301,19 @@ RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> obje
                                       (bvh.root.is_leaf() ? bvh.root.prim_count() : 1.0);
         }
     };
-    if (n < settings.build.parallel_threshold)
+    if (settings.bounds_rule == BRefBoundsRule::transformed_vertices) {
+        // A seed's box may cost searches of its object BVH (microseconds): worth a task per
+        // few of them. Each seed writes its own slot, so the split does not matter.
+        constexpr std::size_t kSearchedSeedsPerTask = 16;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kSearchedSeedsPerTask),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              seed(0, r.begin(), r.end());
+                          });
+    } else if (n < settings.build.parallel_threshold) {
         seed(0, 0, n);
-    else
+    } else {
         for_each_block(n, seed);
+    }
     return inputs;
 }
 

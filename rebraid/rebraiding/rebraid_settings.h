@@ -155,8 +155,11 @@ struct RebraidSettings {
     /// cover at least this fraction of its box (estimated on a grid over the segment).
     float overlap_threshold = 0.25f;
     /// Binning, SAH costs and the serial threshold of the top-level build (leaves hold one
-    /// BRef: max_leaf_size is 1).
-    BuildSettings build{.max_leaf_size = 1};
+    /// BRef: max_leaf_size is 1). Subtrees of 32 BRefs and more are tasks of their own (an
+    /// object build's threshold is 1,024 primitives): a BRef costs microseconds here (opening
+    /// estimates, children's vertex bounds), and at 1,024 a top of a few hundred instances
+    /// ran on one thread. The tree does not depend on it.
+    BuildSettings build{.max_leaf_size = 1, .task_threshold = 32};
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

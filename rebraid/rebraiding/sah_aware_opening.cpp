@@ -1,5 +1,6 @@
 #include "rebraid/rebraiding/sah_aware_opening.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
@@ -20,6 +21,12 @@ constexpr double kChildrenPerNode = kBvhWidth - 1;
 /// (the virtual builds with and without opening, and the groups below the first level):
 /// at the top of the tree they are the rule's longest serial stretches.
 constexpr std::size_t kParallelEstimateBoxes = 256;
+
+/// Candidates whose children's world boxes are still to be found are found in parallel from
+/// this many on, this many per task: a BRef's children cost up to 48 searches of its object
+/// BVH (vertex bounds), some microseconds.
+constexpr std::size_t kParallelChildBoundsBRefs = 4;
+constexpr std::size_t kChildBoundsBRefsPerTask = 2;
 
 /// Half-area cost of the wide nodes a subtree over `count` boxes inside a box of half area
 /// `area` needs, when nothing is known about how they shrink: (count - 1) / 7 nodes, each
@@ -112,6 +119,40 @@ double estimate_top_cost(std::span<BuildPrim> boxes, const RangeInfo& info,
     return cost;
 }
 
+/// Fills source.child_bounds for the BRefs to inner nodes the estimate below will open (the
+/// same selection: criterion, in array order while the free space lasts), several BRefs per
+/// task: each costs a search of its object BVH per child face, and the estimate would
+/// otherwise make them one after the other. Each BRef's slot is its own, so the boxes are
+/// the same whichever task computes them.
+void compute_candidate_child_bounds(std::span<const BuildPrim> prims,
+                                    std::span<const BRefTarget> targets,
+                                    const OpeningCriterion& criterion, const BRefSource& source,
+                                    std::uint32_t free_space) {
+    if (!source.child_bounds || source.bounds_rule == BRefBoundsRule::transformed_box) return;
+    std::vector<std::uint32_t> missing;  // indices into prims
+    std::uint64_t offset = 0;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        const BuildPrim& prim = prims[i];
+        const BRefTarget& target = targets[prim.id];
+        if (!criterion.wants_to_open(prim, target, i)) continue;
+        const std::uint32_t extra = bref_child_count(source, target) - 1;
+        if (offset + extra > free_space) break;
+        offset += extra;
+        if (target.object_node.is_inner() && !source.child_bounds->find(prim.id, target))
+            missing.push_back(std::uint32_t(i));
+    }
+    if (missing.size() < kParallelChildBoundsBRefs) return;  // the estimate computes them
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, missing.size(), kChildBoundsBRefsPerTask),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                const BuildPrim& prim = prims[missing[k]];
+                for_each_bref_child_bounds(source, prim.id, targets[prim.id],
+                                           [](NodeRef, const BBox3f&, const BBox3f&) {});
+            }
+        });
+}
+
 }  // namespace
 
 OpeningEstimate estimate_opening(std::span<const BuildPrim> prims, const RangeInfo& info,
@@ -128,6 +169,7 @@ OpeningEstimate estimate_opening(std::span<const BuildPrim> prims, const RangeIn
         opened.push_back(box);
         opened_info.add(box);
     };
+    compute_candidate_child_bounds(prims, targets, criterion, source, free_space);
     std::uint64_t offset = 0;
     bool is_full = false;
     for (std::size_t i = 0; i < prims.size(); ++i) {
