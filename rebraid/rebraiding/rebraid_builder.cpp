@@ -305,10 +305,9 @@ RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> obje
         // A seed's box may cost searches of its object BVH (microseconds): worth a task per
         // few of them. Each seed writes its own slot, so the split does not matter.
         constexpr std::size_t kSearchedSeedsPerTask = 16;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kSearchedSeedsPerTask),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              seed(0, r.begin(), r.end());
-                          });
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, n, kSearchedSeedsPerTask),
+            [&](const tbb::blocked_range<std::size_t>& r) { seed(0, r.begin(), r.end()); });
     } else if (n < settings.build.parallel_threshold) {
         seed(0, 0, n);
     } else {
