@@ -78,7 +78,8 @@ void child_bounds_along(const WideNode& node, Vec3f d, int count, float* bounds)
 #endif
 }
 
-/// The slot of the largest of `bounds` among the slots set in `live` (not empty).
+/// The slot of the largest of `bounds` among the slots set in `live` (not empty); the lowest
+/// such slot on ties.
 int largest_live(const float* bounds, unsigned live) {
     int best = std::countr_zero(live);
     for (unsigned rest = live & (live - 1); rest != 0; rest &= rest - 1) {
@@ -86,6 +87,22 @@ int largest_live(const float* bounds, unsigned live) {
         if (bounds[c] > bounds[best]) best = c;
     }
     return best;
+}
+
+/// The slots among `live` whose bound exceeds `limit`: the children still worth a visit.
+unsigned above(const float* bounds, unsigned live, float limit) {
+#ifdef __AVX2__
+    const __m256 greater =
+        _mm256_cmp_ps(_mm256_load_ps(bounds), _mm256_set1_ps(limit), _CMP_GT_OQ);
+    return live & unsigned(_mm256_movemask_ps(greater));
+#else
+    unsigned result = 0;
+    for (unsigned rest = live; rest != 0; rest &= rest - 1) {
+        const int c = std::countr_zero(rest);
+        if (bounds[c] > limit) result |= 1u << c;
+    }
+    return result;
+#endif
 }
 
 #ifdef __AVX2__
@@ -151,15 +168,14 @@ void raise_support(const ObjectBvh& bvh, NodeRef ref, Vec3f d, float slack, Supp
     const int count = node.child_count();
     alignas(32) float bounds[kBvhWidth];
     child_bounds_along(node, d, count, bounds);
-    for (unsigned live = (1u << count) - 1; live != 0;) {
-        const int c = largest_live(bounds, live);
+    // Children in the order of their bounds, largest first, while one can still beat the best
+    // by more than the slack: each visit may raise the best, so the test is made again after
+    // it, on the children not yet visited (usually one or two are left).
+    unsigned live = (1u << count) - 1;
+    for (unsigned worth = above(bounds, live, support.best + slack); worth != 0;
+         worth = above(bounds, live, support.best + slack)) {
+        const int c = largest_live(bounds, worth);
         live &= ~(1u << c);
-        const float bound = bounds[c];
-        if (bound <= support.best) break;  // the largest left: no other child can beat it
-        if (bound <= support.best + slack) {
-            support.skipped = std::max(support.skipped, bound);
-            continue;
-        }
 #ifdef __AVX2__
         if (node.children[c].is_leaf() && !bvh.leaf_rows.empty()) {
             raise_support_from_rows(bvh.leaf_rows.data() + kLeafRowPadding, node.children[c], d,
@@ -169,6 +185,9 @@ void raise_support(const ObjectBvh& bvh, NodeRef ref, Vec3f d, float slack, Supp
 #endif
         raise_support(bvh, node.children[c], d, slack, support);
     }
+    // The children left are within the slack of the best (or below it, where counting them
+    // changes nothing): the largest of their bounds stands for them.
+    if (live != 0) support.skipped = std::max(support.skipped, bounds[largest_live(bounds, live)]);
 }
 
 float max_abs(Vec3f v) {
