@@ -92,8 +92,7 @@ int largest_live(const float* bounds, unsigned live) {
 /// The slots among `live` whose bound exceeds `limit`: the children still worth a visit.
 unsigned above(const float* bounds, unsigned live, float limit) {
 #ifdef __AVX2__
-    const __m256 greater =
-        _mm256_cmp_ps(_mm256_load_ps(bounds), _mm256_set1_ps(limit), _CMP_GT_OQ);
+    const __m256 greater = _mm256_cmp_ps(_mm256_load_ps(bounds), _mm256_set1_ps(limit), _CMP_GT_OQ);
     return live & unsigned(_mm256_movemask_ps(greater));
 #else
     unsigned result = 0;
