@@ -127,9 +127,9 @@ void add_accel_build_options(CLI::App& command, AccelOptions& options) {
         ->type_name("L");
     command
         .add_option("--budget-doublings", options.rebraid.budget_doublings,
-                    "rebraid: when the build spent its budget, build again with the budget "
-                    "doubled this many times and keep the build of lower exact SAH cost (0: "
-                    "build once)")
+                    "rebraid: when the build spent its budget, build again with it doubled, "
+                    "and when that lowers the exact SAH cost by 1 % of the top level's own, "
+                    "with it doubled this many times; keep the cheapest build (0: build once)")
         ->check(whole_number(0, 16))
         ->capture_default_str()
         ->type_name("D");

@@ -388,29 +388,60 @@ enum class CostNeed { none, if_compared, always };
 TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
                                 CostNeed cost_need);
 
+/// The part of a top level's SAH cost (unnormalised) its own nodes and items make: the
+/// inner nodes' half areas and each item's box area, times its triangles for a leaf item.
+double top_level_own_cost(const TopLevelBvh& top) {
+    double cost = top_inner_cost(top);
+    for (std::size_t i = 0; i < top.items.size(); ++i) {
+        const NodeRef node = top.items[i].object_node;
+        cost += double(top.item_bounds[i].half_area()) * (node.is_leaf() ? node.prim_count() : 1);
+    }
+    return cost;
+}
+
 /// The budget search (RebraidSettings::budget_doublings): `first` is the tracked build at the
-/// rule's budget; when it filled at least budget_search_min_use of that budget, the same
-/// instances are built again with the budget doubled budget_doublings times, and the cheaper
-/// of the two builds is returned. The budgets tried and the costs compared depend on the input
-/// only, so the choice is the same on any thread count.
-TrackedBuild search_larger_budget(const RebraidInputs& inputs, const RebraidSettings& settings,
-                                  TrackedBuild first) {
+/// rule's budget. When it used at least budget_search_min_use of its budget, the budget is
+/// doubled once; when that lowered the exact cost by at least budget_search_min_gain (and the
+/// doubled budget was used as well), the search goes straight to the rule's budget doubled
+/// budget_doublings times. The cheapest build tried is returned. The budgets tried and the
+/// costs compared depend on the input only, so the choice is the same on any thread count.
+TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSettings& settings,
+                                   TrackedBuild first) {
     const std::uint64_t seeds = inputs.seeded.size();
-    // The same test as build_rebraid_once's for whether the first build's cost was taken.
-    const double used = double(first.build.brefs - seeds);
-    if (used < double(settings.budget_search_min_use) * double(first.build.budget)) return first;
-    // Both rules' budgets grow by the same factor, so `larger` multiplies whichever it takes.
-    RebraidSettings larger = settings;
-    const float factor = std::ldexp(1.0f, int(settings.budget_doublings));
-    larger.budget_factor *= factor;
-    larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref / factor);
-    // The caps (every primitive a BRef, max_budget, the item limit) may leave no larger
-    // budget to try.
-    const std::uint64_t larger_budget =
-        std::min(bref_budget(larger, seeds, inputs.primitive_count), NodeRef::kMaxFirst - seeds);
-    if (larger_budget <= first.build.budget) return first;
-    TrackedBuild candidate = build_rebraid_once(inputs, larger, CostNeed::always);
-    return candidate.cost < first.cost ? std::move(candidate) : std::move(first);
+    // The same test as build_rebraid_once's for whether a build's cost was taken.
+    const auto used_its_budget = [&](const RebraidBuild& build) {
+        return double(build.brefs - seeds) >=
+               double(settings.budget_search_min_use) * double(build.budget);
+    };
+    if (!used_its_budget(first.build)) return first;
+    // Both rules' budgets grow by the same factor, so a multiple of the settings' budget
+    // multiplies whichever rule gives it. The caps (every primitive a BRef, max_budget, the
+    // item limit) may leave no larger budget to try.
+    std::uint64_t last_budget = first.build.budget;
+    const auto build_times = [&](std::uint32_t doublings) -> std::optional<TrackedBuild> {
+        RebraidSettings larger = settings;
+        const float factor = std::ldexp(1.0f, int(doublings));
+        larger.budget_factor *= factor;
+        larger.primitives_per_bref = std::max(1.0f, larger.primitives_per_bref / factor);
+        const std::uint64_t budget = std::min(bref_budget(larger, seeds, inputs.primitive_count),
+                                              NodeRef::kMaxFirst - seeds);
+        if (budget <= last_budget) return std::nullopt;
+        last_budget = budget;
+        return build_rebraid_once(inputs, larger, CostNeed::always);
+    };
+    std::optional<TrackedBuild> doubled = build_times(1);
+    if (!doubled) return first;
+    // The gain is measured against the part of the cost a top level owns (its nodes and the
+    // boxes that enter the objects): the tracked costs are exact up to a constant.
+    const bool doubling_pays =
+        first.cost - doubled->cost >=
+        double(settings.budget_search_min_gain) * top_level_own_cost(first.build.top);
+    TrackedBuild best = doubled->cost < first.cost ? std::move(*doubled) : std::move(first);
+    if (settings.budget_doublings < 2 || !doubling_pays || !used_its_budget(best.build))
+        return best;
+    std::optional<TrackedBuild> largest = build_times(settings.budget_doublings);
+    if (largest && largest->cost < best.cost) return std::move(*largest);
+    return best;
 }
 
 }  // namespace
@@ -440,7 +471,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
         rebraid_inputs(scene, object_bvhs, instances, settings, is_guarded || is_searching);
     TrackedBuild result = build_rebraid_once(
         inputs, settings, is_guarded || is_searching ? CostNeed::if_compared : CostNeed::none);
-    if (is_searching) result = search_larger_budget(inputs, settings, std::move(result));
+    if (is_searching) result = search_larger_budgets(inputs, settings, std::move(result));
     if (is_guarded && result.build.opened > 0) {
         // The opening rules estimate; the guard measures: the same instances without any
         // opening, kept when its exact cost is not higher.

@@ -35,6 +35,9 @@ void RebraidSettings::validate() const {
     if (budget_doublings > 16)
         throw Error("re-braiding setting budget_doublings " + std::to_string(budget_doublings) +
                     " must be at most 16");
+    check(std::isfinite(budget_search_min_gain) && budget_search_min_gain >= 0.0f &&
+              budget_search_min_gain < 1.0f,
+          "budget_search_min_gain", budget_search_min_gain, "must be finite and in [0, 1)");
     check(std::isfinite(budget_search_min_use) && budget_search_min_use >= 0.0f &&
               budget_search_min_use <= 1.0f,
           "budget_search_min_use", budget_search_min_use, "must be finite and in [0, 1]");

@@ -53,18 +53,25 @@ struct RebraidSettings {
     /// §5.2: 1000).
     float primitives_per_bref = 1000.0f;
     /// Budget search: when the build at the rule's budget spent it (see
-    /// `budget_search_min_use`), build once more with the budget doubled this many times
-    /// (x8 for 3) and keep the build of lower exact SAH cost (rebraid_cost_guard.h). 0 builds
-    /// once, at the rule's budget. The paper notes that subtrees may run out of budget where
-    /// objects overlap deep down (§7); on the shared scenes where the rule's budget was spent
-    /// in full (brainstem, cg57_cruiser, powerplant) each doubling up to x8 lowered the cost
-    /// (by 2-24 % of the part the top level's own nodes and boxes make); x4 traced 4-23 %
-    /// faster than x1 (bench/RESULTS.md) and x8 cut the instructions per diffuse ray by a
-    /// further 2.8, 3.4 and 14 % (callgrind). One build at x8 gives that tree for the price of
-    /// its own build, where building at x2, x4 and x8 in turn cost about twice as much
-    /// (docs/design.md).
-    /// Per-frame tops of DynamicSceneAccel search no budgets.
+    /// `budget_search_min_use`), build again with the budget doubled, and when that lowered
+    /// the exact SAH cost (rebraid_cost_guard.h) by at least `budget_search_min_gain`, once
+    /// more with the budget doubled this many times (x8 for 3); keep the cheapest build. 0
+    /// builds once, at the rule's budget; 1 tries the doubled budget only. The paper notes
+    /// that subtrees may run out of budget where objects overlap deep down (§7); on the shared
+    /// scenes where the rule's budget was spent in full (brainstem, cg57_cruiser, powerplant)
+    /// each doubling up to x8 lowered the cost (by 2-24 % of the part the top level's own
+    /// nodes and boxes make); x4 traced 4-23 % faster than x1 (bench/RESULTS.md) and x8 cut
+    /// the instructions per diffuse ray by a further 2.8, 3.4 and 14 % (callgrind). Where a
+    /// doubling pays, the search goes on to the largest budget in one step rather than
+    /// doubling again and again, for the same trees on those scenes at about two thirds of
+    /// the search's builds (docs/design.md); where the first doubling does not pay (fzk_haus,
+    /// crown and the forests under the paper's rules) it stops there. Per-frame tops of
+    /// DynamicSceneAccel search no budgets.
     std::uint32_t budget_doublings = 3;
+    /// Least cost reduction of the first doubling for the budget search to go on to the
+    /// largest budget, relative to the part of the SAH cost the top level itself makes (its
+    /// nodes and the boxes entering objects).
+    float budget_search_min_gain = 0.01f;
     /// The budget search builds again only after a build that filled at least this fraction of
     /// its budget: a build that left free space unused was not held back by its budget, and
     /// where nothing opens (forests, cities) a larger budget would only repeat the build. 0

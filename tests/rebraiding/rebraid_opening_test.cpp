@@ -346,15 +346,17 @@ TEST(RebraidOpening, SahRuleNeverAboveTwoLevelOnRotatedInstances) {
     }
 }
 
-TEST(RebraidOpening, BudgetSearchKeepsTheCheaperOfTheRuleBudgetAndTheLargerOne) {
+TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
     const auto hash_of = [](const Scene& scene, const std::vector<ObjectBvh>& bvhs,
                             const RebraidBuild& build) {
         return structure_hash_of(scene, bvhs, RebraidBuild(build).top);
     };
-    // Both outcomes occur: on the overlap scene eight times the budget costs more under the
-    // extent rule (it opens more, and not for the better) and the same under the SAH rule; on
-    // the crossing crown at one extra BRef per instance it pays under both. Every case asks
-    // for the search whatever the budget's use.
+    // Both outcomes of the doubling occur: on the overlap scene twice the budget costs more
+    // under the extent rule (it opens more, and not for the better), and the search stops
+    // there; on the crossing crown at one extra BRef per instance it pays, and the search
+    // goes on to eight times the budget. The city's separate buildings open nothing under the
+    // SAH rule, so there the first build's cost is taken for the search alone. Every case
+    // asks for the search whatever the budget's use and the doubling's gain.
     struct Case {
         const char* name;
         Scene scene;
@@ -363,35 +365,87 @@ TEST(RebraidOpening, BudgetSearchKeepsTheCheaperOfTheRuleBudgetAndTheLargerOne) 
     std::vector<Case> cases;
     cases.push_back({"overlap", test::make_overlap_scene(120, 5), 4.0f});
     cases.push_back({"crown", make_crossing_crown_scene(), 1.0f});
-    // Separate buildings: the SAH rule opens nothing, so the first build's cost is taken for
-    // the search alone.
     cases.push_back(
         {"city", generate_scene(SceneKind::kCity, {.instance_count = 100, .seed = 3}), 4.0f});
     for (const Case& c : cases) {
         const std::vector<ObjectBvh> bvhs = build_object_bvhs(c.scene, own_object_bvh_builder());
         for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
             SCOPED_TRACE(std::string(c.name) + " rule " + std::to_string(int(rule)));
-            RebraidSettings fixed{.budget_factor = c.budget_factor,
-                                  .budget_doublings = 0,
-                                  .budget_search_min_use = 0.0f,
-                                  .opening_rule = rule};
+            const RebraidSettings fixed{.budget_factor = c.budget_factor,
+                                        .budget_doublings = 0,
+                                        .budget_search_min_gain = 0.0f,
+                                        .budget_search_min_use = 0.0f,
+                                        .opening_rule = rule};
             RebraidSettings searching = fixed;
             searching.budget_doublings = 3;
             const RebraidBuild searched = build_rebraid(c.scene, bvhs, searching);
-            const RebraidBuild at_rule = build_rebraid(c.scene, bvhs, fixed);
             // Both budget rules grow by the same factor.
-            fixed.budget_factor *= 8.0f;
-            fixed.primitives_per_bref /= 8.0f;
-            const RebraidBuild at_eight_times = build_rebraid(c.scene, bvhs, fixed);
-            const double searched_cost = absolute_cost(c.scene, bvhs, searched.top);
-            const double rule_cost = absolute_cost(c.scene, bvhs, at_rule.top);
-            const double larger_cost = absolute_cost(c.scene, bvhs, at_eight_times.top);
-            // The cheaper of the two, whole: its structure, its budget, its cost.
-            const RebraidBuild& cheaper = larger_cost < rule_cost ? at_eight_times : at_rule;
-            EXPECT_EQ(hash_of(c.scene, bvhs, searched), hash_of(c.scene, bvhs, cheaper));
-            EXPECT_EQ(searched.budget, cheaper.budget);
-            EXPECT_DOUBLE_EQ(searched_cost, std::min(rule_cost, larger_cost));
+            const auto at_times = [&](float factor) {
+                RebraidSettings settings = fixed;
+                settings.budget_factor *= factor;
+                settings.primitives_per_bref /= factor;
+                return build_rebraid(c.scene, bvhs, settings);
+            };
+            std::vector<RebraidBuild> tried;
+            tried.push_back(at_times(1.0f));
+            tried.push_back(at_times(2.0f));
+            std::vector<double> costs;
+            for (const RebraidBuild& build : tried)
+                costs.push_back(absolute_cost(c.scene, bvhs, build.top));
+            if (costs[1] <= costs[0]) {  // the doubling did not cost more: on to x8
+                tried.push_back(at_times(8.0f));
+                costs.push_back(absolute_cost(c.scene, bvhs, tried.back().top));
+            }
+            // The cheapest, the first of equals: its structure, its budget, its cost.
+            const std::size_t cheapest =
+                std::size_t(std::min_element(costs.begin(), costs.end()) - costs.begin());
+            EXPECT_EQ(hash_of(c.scene, bvhs, searched), hash_of(c.scene, bvhs, tried[cheapest]));
+            EXPECT_EQ(searched.budget, tried[cheapest].budget);
+            EXPECT_DOUBLE_EQ(absolute_cost(c.scene, bvhs, searched.top), costs[cheapest]);
         }
+    }
+}
+
+TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
+    // The crown's small objects pack into each other: from one extra BRef per instance, each
+    // doubling of the budget opens more overlap and lowers the cost, several times over.
+    const Scene scene = make_crossing_crown_scene();
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    const auto hash_of = [&](const RebraidBuild& build) {
+        return structure_hash_of(scene, bvhs, RebraidBuild(build).top);
+    };
+    const auto cost_of = [&](const RebraidBuild& build) {
+        return absolute_cost(scene, bvhs, RebraidBuild(build).top);
+    };
+    for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
+        SCOPED_TRACE(int(rule));
+        const RebraidSettings base{.budget_factor = 1.0f,
+                                   .budget_doublings = 0,
+                                   .budget_search_min_use = 0.0f,
+                                   .opening_rule = rule};
+        const auto search = [&](std::uint32_t doublings, float min_gain) {
+            RebraidSettings settings = base;
+            settings.budget_doublings = doublings;
+            settings.budget_search_min_gain = min_gain;
+            return build_rebraid(scene, bvhs, settings);
+        };
+        const std::uint64_t rule_budget =
+            bref_budget(base, scene.instances.size(), scene.instanced_triangle_count());
+        // One doubling allowed: the stop rule has nothing left to stop.
+        const RebraidBuild one_doubling = search(1, 0.0f);
+        ASSERT_EQ(one_doubling.budget, 2 * rule_budget) << "the first doubling should pay here";
+        // No least gain: the first doubling lowers the cost, so the search goes on to the
+        // largest budget, a cheaper top than one doubling finds.
+        const RebraidBuild unhindered = search(8, 0.0f);
+        EXPECT_GT(unhindered.budget, 2 * rule_budget);
+        EXPECT_LT(cost_of(unhindered), cost_of(one_doubling));
+        // A least gain the first doubling does not reach: the search keeps it (it is
+        // cheaper) and stops there, although eight doublings are allowed.
+        const RebraidBuild stopped = search(8, 0.99f);
+        EXPECT_EQ(stopped.budget, one_doubling.budget);
+        EXPECT_EQ(stopped.brefs, one_doubling.brefs);
+        EXPECT_EQ(hash_of(stopped), hash_of(one_doubling));
+        EXPECT_NE(hash_of(stopped), hash_of(unhindered));
     }
 }
 
@@ -409,6 +463,7 @@ TEST(RebraidOpening, BudgetSearchDoublesOnlyABudgetSpentInFull) {
     const auto search_with_min_use = [&](double min_use) {
         RebraidSettings settings = once;
         settings.budget_doublings = 1;
+        settings.budget_search_min_gain = 0.0f;
         settings.budget_search_min_use = float(min_use);
         return build_rebraid(scene, bvhs, settings);
     };
@@ -420,6 +475,8 @@ TEST(RebraidOpening, BudgetSearchDoublesOnlyABudgetSpentInFull) {
     // Asked for a little less: the doubled build is tried and, cheaper here, kept.
     const RebraidBuild doubled = search_with_min_use(used - 0.01);
     EXPECT_EQ(doubled.budget, 2 * first.budget);
+    EXPECT_THROW((RebraidSettings{.budget_search_min_gain = -0.1f}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.budget_search_min_gain = 1.0f}.validate()), Error);
     EXPECT_THROW((RebraidSettings{.budget_search_min_use = 1.5f}.validate()), Error);
     EXPECT_THROW((RebraidSettings{.budget_search_min_use = -0.1f}.validate()), Error);
 }
