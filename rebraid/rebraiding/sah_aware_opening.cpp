@@ -138,7 +138,11 @@ void compute_candidate_child_bounds(std::span<const BuildPrim> prims,
         const std::uint32_t extra = bref_child_count(source, target) - 1;
         if (offset + extra > free_space) break;
         offset += extra;
-        if (target.object_node.is_inner() && !source.child_bounds->find(prim.id, target))
+        // Under a map that takes boxes to boxes a child's box is its transformed box, no
+        // search (bref_bounds.h): not worth a task.
+        if (target.object_node.is_inner() &&
+            !source.object_to_world(target.instance_id).maps_boxes_to_boxes() &&
+            !source.child_bounds->find(prim.id, target))
             missing.push_back(std::uint32_t(i));
     }
     if (missing.size() < kParallelChildBoundsBRefs) return;  // the estimate computes them
