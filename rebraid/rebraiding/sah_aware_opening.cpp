@@ -146,15 +146,15 @@ void compute_candidate_child_bounds(std::span<const BuildPrim> prims,
             missing.push_back(std::uint32_t(i));
     }
     if (missing.size() < kParallelChildBoundsBRefs) return;  // the estimate computes them
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, missing.size(), kChildBoundsBRefsPerTask),
-        [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                const BuildPrim& prim = prims[missing[k]];
-                for_each_bref_child_bounds(source, prim.id, targets[prim.id],
-                                           [](NodeRef, const BBox3f&, const BBox3f&) {});
-            }
-        });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, missing.size(), kChildBoundsBRefsPerTask),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                              const BuildPrim& prim = prims[missing[k]];
+                              for_each_bref_child_bounds(
+                                  source, prim.id, targets[prim.id],
+                                  [](NodeRef, const BBox3f&, const BBox3f&) {});
+                          }
+                      });
 }
 
 }  // namespace
