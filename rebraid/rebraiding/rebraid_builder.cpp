@@ -436,9 +436,9 @@ TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSet
     const bool doubling_pays =
         first.cost - doubled->cost >=
         double(settings.budget_search_min_gain) * top_level_own_cost(first.build.top);
+    const bool doubled_used_its_budget = used_its_budget(doubled->build);
     TrackedBuild best = doubled->cost < first.cost ? std::move(*doubled) : std::move(first);
-    if (settings.budget_doublings < 2 || !doubling_pays || !used_its_budget(best.build))
-        return best;
+    if (settings.budget_doublings < 2 || !doubling_pays || !doubled_used_its_budget) return best;
     std::optional<TrackedBuild> largest = build_times(settings.budget_doublings);
     if (largest && largest->cost < best.cost) return std::move(*largest);
     return best;
