@@ -64,8 +64,8 @@ struct RebraidSettings {
     /// the instructions per diffuse ray by a further 2.8, 3.4 and 14 % (callgrind). Where a
     /// doubling pays, the search goes on to the largest budget in one step rather than
     /// doubling again and again, for the same trees on those scenes at about two thirds of
-    /// the search's builds (docs/design.md); where the first doubling does not pay (fzk_haus,
-    /// crown and the forests under the paper's rules) it stops there. Per-frame tops of
+    /// the search's builds (docs/design.md); where the first doubling does not pay (crown, the
+    /// forest and the city under the paper's rules) it stops there. Per-frame tops of
     /// DynamicSceneAccel search no budgets.
     std::uint32_t budget_doublings = 3;
     /// Least cost reduction of the first doubling for the budget search to go on to the
