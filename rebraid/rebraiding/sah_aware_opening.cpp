@@ -119,31 +119,41 @@ double estimate_top_cost(std::span<BuildPrim> boxes, const RangeInfo& info,
     return cost;
 }
 
-/// Fills source.child_bounds for the BRefs to inner nodes the estimate below will open (the
-/// same selection: criterion, in array order while the free space lasts), several BRefs per
-/// task: each costs a search of its object BVH per child face, and the estimate would
-/// otherwise make them one after the other. Each BRef's slot is its own, so the boxes are
-/// the same whichever task computes them.
-void compute_candidate_child_bounds(std::span<const BuildPrim> prims,
-                                    std::span<const BRefTarget> targets,
-                                    const OpeningCriterion& criterion, const BRefSource& source,
-                                    std::uint32_t free_space) {
-    if (!source.child_bounds || source.bounds_rule == BRefBoundsRule::transformed_box) return;
-    std::vector<std::uint32_t> missing;  // indices into prims
+/// Indices (into `prims`) of the BRefs an opening would open: those `criterion` picks, in
+/// array order, while their extra BRefs fit in `free_space`; the first that does not fit
+/// leaves it and every later one closed, as open_brefs does.
+std::vector<std::uint32_t> brefs_to_open(std::span<const BuildPrim> prims,
+                                         std::span<const BRefTarget> targets,
+                                         const OpeningCriterion& criterion,
+                                         const BRefSource& source, std::uint32_t free_space) {
+    std::vector<std::uint32_t> chosen;
     std::uint64_t offset = 0;
     for (std::size_t i = 0; i < prims.size(); ++i) {
-        const BuildPrim& prim = prims[i];
-        const BRefTarget& target = targets[prim.id];
-        if (!criterion.wants_to_open(prim, target, i)) continue;
+        const BRefTarget& target = targets[prims[i].id];
+        if (!criterion.wants_to_open(prims[i], target, i)) continue;
         const std::uint32_t extra = bref_child_count(source, target) - 1;
         if (offset + extra > free_space) break;
         offset += extra;
-        // Under a map that takes boxes to boxes a child's box is its transformed box, no
-        // search (bref_bounds.h): not worth a task.
+        chosen.push_back(std::uint32_t(i));
+    }
+    return chosen;
+}
+
+/// Fills source.child_bounds for the BRefs of `to_open` to inner nodes, several BRefs per
+/// task: each costs a search of its object BVH per child face, and the estimate would
+/// otherwise make them one after the other. BRefs of instances whose transform takes boxes
+/// to boxes need no search (bref_bounds.h) and are left to the estimate. Each BRef's slot is
+/// its own, so the boxes are the same whichever task computes them.
+void compute_child_bounds(std::span<const BuildPrim> prims, std::span<const BRefTarget> targets,
+                          const BRefSource& source, std::span<const std::uint32_t> to_open) {
+    if (!source.child_bounds || source.bounds_rule == BRefBoundsRule::transformed_box) return;
+    std::vector<std::uint32_t> missing;  // indices into prims
+    for (const std::uint32_t i : to_open) {
+        const BRefTarget& target = targets[prims[i].id];
         if (target.object_node.is_inner() &&
             !source.object_to_world(target.instance_id).maps_boxes_to_boxes() &&
-            !source.child_bounds->find(prim.id, target))
-            missing.push_back(std::uint32_t(i));
+            !source.child_bounds->find(prims[i].id, target))
+            missing.push_back(i);
     }
     if (missing.size() < kParallelChildBoundsBRefs) return;  // the estimate computes them
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, missing.size(), kChildBoundsBRefsPerTask),
@@ -173,39 +183,32 @@ OpeningEstimate estimate_opening(std::span<const BuildPrim> prims, const RangeIn
         opened.push_back(box);
         opened_info.add(box);
     };
-    compute_candidate_child_bounds(prims, targets, criterion, source, free_space);
-    std::uint64_t offset = 0;
-    bool is_full = false;
+    const std::vector<std::uint32_t> to_open =
+        brefs_to_open(prims, targets, criterion, source, free_space);
+    compute_child_bounds(prims, targets, source, to_open);
+    estimate.opened = std::uint32_t(to_open.size());
+    std::size_t next_open = 0;  // into to_open, which is in array order
     for (std::size_t i = 0; i < prims.size(); ++i) {
         const BuildPrim& prim = prims[i];
         closed[i] = {prim.bounds, 0, 1};
-        const BRefTarget& target = targets[prim.id];
-        if (!is_full && criterion.wants_to_open(prim, target, i)) {
-            const std::uint32_t extra = bref_child_count(source, target) - 1;
-            if (offset + extra > free_space) {
-                is_full = true;  // open_brefs opens nothing from here on either
-            } else {
-                offset += extra;
-                ++estimate.opened;
-                const AffineTransform& to_world = source.object_to_world(target.instance_id);
-                const NodeRef node = target.object_node;
-                const double area = prim.bounds.half_area();
-                closed_items +=
-                    area * (node.is_leaf() ? node.prim_count() : 1.0) + entry_cost * area;
-                for_each_bref_child_bounds(
-                    source, prim.id, target,
-                    [&](NodeRef child, const BBox3f& box, const BBox3f& bounds) {
-                        const double tests = child.is_leaf() ? child.prim_count() : 1.0;
-                        if (node.is_inner())
-                            closed_items += mapped_box_half_area(box, to_world) * tests;
-                        const double child_area = bounds.half_area();
-                        opened_items += child_area * tests + entry_cost * child_area;
-                        add_opened({bounds, 0, 1});
-                    });
-                continue;
-            }
+        if (next_open == to_open.size() || to_open[next_open] != i) {
+            add_opened(closed[i]);
+            continue;
         }
-        add_opened(closed[i]);
+        ++next_open;
+        const BRefTarget& target = targets[prim.id];
+        const AffineTransform& to_world = source.object_to_world(target.instance_id);
+        const NodeRef node = target.object_node;
+        const double area = prim.bounds.half_area();
+        closed_items += area * (node.is_leaf() ? node.prim_count() : 1.0) + entry_cost * area;
+        for_each_bref_child_bounds(
+            source, prim.id, target, [&](NodeRef child, const BBox3f& box, const BBox3f& bounds) {
+                const double tests = child.is_leaf() ? child.prim_count() : 1.0;
+                if (node.is_inner()) closed_items += mapped_box_half_area(box, to_world) * tests;
+                const double child_area = bounds.half_area();
+                opened_items += child_area * tests + entry_cost * child_area;
+                add_opened({bounds, 0, 1});
+            });
     }
     if (estimate.opened == 0) return estimate;
     const int levels = int(settings.estimate_levels);
