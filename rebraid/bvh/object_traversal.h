@@ -13,6 +13,17 @@
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
+/// What a leaf a query starts at may be: a whole leaf of the object BVH, or, in a re-braided
+/// top whose BRefs opened leaves into single triangles (TopLevelBvh::has_partial_leaves),
+/// part of one. The pre-arranged rows address whole leaves only; part of a leaf is read from
+/// the corner storage.
+enum class StartLeaf { whole, may_be_part };
+
+/// Whether the pre-arranged rows of `bvh` serve a query that starts at `start`.
+inline bool rows_serve(ObjectBvhView bvh, NodeRef start, StartLeaf start_leaf) {
+    return bvh.leaf_rows != nullptr && (start.is_inner() || start_leaf == StartLeaf::whole);
+}
+
 /// A closer-hit callback that does nothing (intersect_object_bvh_leaf_order's default).
 struct NoHitDataPrefetch {
     template <class Corners>
@@ -148,16 +159,15 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
 /// data the test has just read: the caller prefetches what it will look up for the final hit
 /// (ids in leaf order), so that the lookup's cache miss overlaps the rest of the traversal,
 /// or copies the corners. (Asking for every visited leaf's ids instead cost more than the
-/// misses it hid.)
+/// misses it hid.) `start_leaf` says what a leaf `start` may be (StartLeaf).
 template <class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                      Hit& hit, TraversalCounters* counters,
-                                     HitDataPrefetch&& prefetch_hit_data = {}) {
+                                     HitDataPrefetch&& prefetch_hit_data = {},
+                                     [[maybe_unused]] StartLeaf start_leaf = StartLeaf::whole) {
     using namespace object_traversal_detail;
 #ifdef REBRAID_SIMD_AVX2
-    // The pre-arranged rows (when made) below an inner node; a leaf start may be part of a
-    // leaf (a re-braided BRef of one triangle), which only the corner storage addresses.
-    if (start.is_inner() && bvh.leaf_rows != nullptr) {
+    if (rows_serve(bvh, start, start_leaf)) {
         LeafRowLanes lanes(bvh.leaf_rows);
         return intersect_with_lanes(lanes, bvh.nodes, start, prepared, hit, counters,
                                     prefetch_hit_data);
@@ -174,11 +184,12 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 /// With `located` given, also sets located->leaf_position to the hit's leaf-order position
 /// and located->corners to its corners, copied as each closer hit is found from the leaf data
 /// the test had just read (that caller reads them next: from ObjectBvh::triangles they would
-/// cost a cache miss), and then calls `on_closer_hit(*located)`.
+/// cost a cache miss), and then calls `on_closer_hit(*located)`. `start_leaf`: see StartLeaf.
 template <class OnCloserHit = void (*)(const HitTriangle&)>
 bool intersect_object_bvh(
     ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit, TraversalCounters* counters,
-    HitTriangle* located = nullptr, OnCloserHit&& on_closer_hit = [](const HitTriangle&) {}) {
+    HitTriangle* located = nullptr, OnCloserHit&& on_closer_hit = [](const HitTriangle&) {},
+    StartLeaf start_leaf = StartLeaf::whole) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids;
     const auto prefetch_hit_data = [&](std::uint32_t position, auto&& corners) {
@@ -190,19 +201,21 @@ bool intersect_object_bvh(
         }
     };
     if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,
-                                         prefetch_hit_data))
+                                         prefetch_hit_data, start_leaf))
         return false;
     hit = leaf_order_hit;
     hit.prim_id = prim_ids[leaf_order_hit.prim_id];
     return true;
 }
 
-/// True when any triangle below `start` is hit within [ray.tnear, ray.tfar].
+/// True when any triangle below `start` is hit within [ray.tnear, ray.tfar]; `start_leaf` as
+/// for intersect_object_bvh_leaf_order.
 inline bool occluded_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
-                                TraversalCounters* counters) {
+                                TraversalCounters* counters,
+                                [[maybe_unused]] StartLeaf start_leaf = StartLeaf::whole) {
     using namespace object_traversal_detail;
 #ifdef REBRAID_SIMD_AVX2
-    if (start.is_inner() && bvh.leaf_rows != nullptr) {  // see intersect_object_bvh_leaf_order
+    if (rows_serve(bvh, start, start_leaf)) {
         LeafRowLanes lanes(bvh.leaf_rows);
         return occluded_with_lanes(lanes, bvh.nodes, start, prepared, counters);
     }

@@ -254,6 +254,7 @@ IncrementalTopBuild IncrementalTopLevel::build_frame(const Scene& scene,
     }
     top.root = graft(upper.root);
     top.bounds = upper.bounds;
+    top.has_partial_leaves = fixed.has_partial_leaves || dynamic.top.has_partial_leaves;
 
     out.brefs = top.items.size();
     out.cut_pieces = std::uint32_t(cut.pieces.size());

@@ -485,6 +485,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
             result = std::move(plain);
         }
     }
+    result.build.top.has_partial_leaves = settings.open_leaves;
     result.build.top.build_ms = timer.elapsed_ms();
     return std::move(result.build);
 }

@@ -25,6 +25,10 @@ struct TopLevelBvh {
     std::vector<TopLevelItem> items;
     /// World bounds of each item (for statistics and validation; traversal does not read it).
     std::vector<BBox3f> item_bounds;
+    /// Some items may name part of an object BVH leaf (RebraidSettings::open_leaves opens
+    /// leaves into single triangles). Traversal then reads leaf items' triangles from the
+    /// corner storage: the pre-arranged leaf rows address whole leaves only.
+    bool has_partial_leaves = false;
     double build_ms = 0.0;
 
     std::uint64_t memory_bytes() const {

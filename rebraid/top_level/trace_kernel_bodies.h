@@ -102,6 +102,7 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
     const ObjectBvhView* views = accel.object_views().data();
+    const StartLeaf start_leaf = top.has_partial_leaves ? StartLeaf::may_be_part : StartLeaf::whole;
     const auto enter_items = [&](NodeRef leaf) {
         const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
@@ -114,7 +115,7 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
                     observer->on_closer_hit(observer->context, item.instance_id, triangle);
             };
             if (intersect_object_bvh(views[target.mesh], item.object_node, object_ray, hit,
-                                     counters, located, on_closer_hit)) {
+                                     counters, located, on_closer_hit, start_leaf)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -149,6 +150,7 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
     const ObjectBvhView* views = accel.object_views().data();
+    const StartLeaf start_leaf = top.has_partial_leaves ? StartLeaf::may_be_part : StartLeaf::whole;
     // Any order: the first hit ends the query.
     return traverse_bvh<TraversalOrder::any>(
         top.nodes.data(), top.root, world_ray, nullptr, [&](NodeRef leaf) {
@@ -157,7 +159,8 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
                 const TopLevelItem& item = top.items[i];
                 const InstanceTarget& target = targets[item.instance_id];
                 PreparedRay& object_ray = object_rays.ray_for(target);
-                if (occluded_object_bvh(views[target.mesh], item.object_node, object_ray, nullptr))
+                if (occluded_object_bvh(views[target.mesh], item.object_node, object_ray, nullptr,
+                                        start_leaf))
                     return true;
             }
             return false;

@@ -5,6 +5,7 @@
 
 #include <bit>
 #include <cstdint>
+#include <set>
 #include <vector>
 
 #include "rebraid/bvh/leaf_rows.h"
@@ -95,9 +96,30 @@ void expect_identical(const test::AccelAnswers& a, const test::AccelAnswers& b) 
     EXPECT_GT(hits, a.hits.size() / 10);  // enough hits for the comparison to mean something
 }
 
+// Items of a top level that name part of an object BVH leaf (leaf references that are no
+// leaf of their object BVH).
+std::size_t count_partial_leaf_items(const InstancedAccel& accel) {
+    std::vector<std::set<std::uint32_t>> leaves(accel.object_bvhs().size());
+    for (std::size_t mesh = 0; mesh < leaves.size(); ++mesh) {
+        const ObjectBvh& bvh = accel.object_bvhs()[mesh];
+        if (bvh.root.is_leaf()) leaves[mesh].insert(bvh.root.bits());
+        for (const WideNode& node : bvh.nodes)
+            for (const NodeRef child : node.children)
+                if (child.is_leaf()) leaves[mesh].insert(child.bits());
+    }
+    std::size_t partial = 0;
+    for (const TopLevelItem& item : accel.top_level().items) {
+        const std::uint32_t mesh = accel.instance_meshes()[item.instance_id];
+        if (item.object_node.is_leaf() && !leaves[mesh].contains(item.object_node.bits()))
+            ++partial;
+    }
+    return partial;
+}
+
 // The kernels read the rows where they exist and the per-triangle corners where not (and for
-// re-braided BRefs of single triangles, which start inside a leaf): both give the same
-// answers, bit for bit, for the flat, two-level and re-braided structures.
+// re-braided BRefs of single triangles, which start inside a leaf: TopLevelBvh::
+// has_partial_leaves): both give the same answers, bit for bit, for the flat, two-level and
+// re-braided structures.
 TEST(LeafRows, KernelsAnswerTheSameWithAndWithoutThem) {
     const Scene scene = make_default_scene();
     const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 20000, 11);
@@ -111,13 +133,21 @@ TEST(LeafRows, KernelsAnswerTheSameWithAndWithoutThem) {
     }
     RebraidSettings single_triangles;
     single_triangles.open_threshold = 0.0f;
-    single_triangles.budget_factor = 50.0f;
+    single_triangles.budget_factor = 1000.0f;
     single_triangles.open_leaves = true;
+    single_triangles.opening_rule = OpeningRule::extent;
     for (const RebraidSettings& rebraid : {RebraidSettings{}, single_triangles}) {
         const InstancedAccel a =
             build_rebraid_accel(scene, own_object_bvh_builder(with_rows), rebraid);
         const InstancedAccel b =
             build_rebraid_accel(scene, own_object_bvh_builder(without_rows), rebraid);
+        // Leaf items of the default rules are whole leaves, which the rows serve; opened
+        // leaves are marked, and their items read the corners.
+        EXPECT_EQ(a.top_level().has_partial_leaves, rebraid.open_leaves);
+        if (rebraid.open_leaves)
+            EXPECT_GT(count_partial_leaf_items(a), 100u);
+        else
+            EXPECT_EQ(count_partial_leaf_items(a), 0u);
         expect_identical(test::trace_all(a, rays), test::trace_all(b, rays));
     }
     const InstancedAccel a = build_two_level_accel(scene, own_object_bvh_builder(with_rows));
