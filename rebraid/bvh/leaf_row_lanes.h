@@ -25,6 +25,11 @@ public:
     void add(NodeRef leaf, OnFull&& on_full) {
         const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
         const float* base = rows_ + std::size_t(9) * first;
+        if (count_ + count <= kTriangleGroupSize) {  // the common case: the leaf fits
+            segments_[segment_count_++] = {base, count, count_, first};
+            count_ += count;
+            return;
+        }
         for (std::uint32_t done = 0; done < count;) {
             if (count_ == kTriangleGroupSize) on_full();
             const std::uint32_t take = std::min(count - done, kTriangleGroupSize - count_);
