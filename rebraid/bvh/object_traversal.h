@@ -19,9 +19,15 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 /// the corner storage.
 enum class StartLeaf { whole, may_be_part };
 
-/// Whether the pre-arranged rows of `bvh` serve a query that starts at `start`.
-inline bool rows_serve(ObjectBvhView bvh, NodeRef start, StartLeaf start_leaf) {
+/// Whether a query that starts at `start` reads the pre-arranged rows of `bvh` (the SIMD
+/// kernels, when the rows were made) rather than the corner storage.
+inline bool rows_serve([[maybe_unused]] ObjectBvhView bvh, [[maybe_unused]] NodeRef start,
+                       [[maybe_unused]] StartLeaf start_leaf) {
+#ifdef REBRAID_SIMD_AVX2
     return bvh.leaf_rows != nullptr && (start.is_inner() || start_leaf == StartLeaf::whole);
+#else
+    return false;
+#endif
 }
 
 /// A closer-hit callback that does nothing (intersect_object_bvh_leaf_order's default).

@@ -34,7 +34,8 @@ public:
 
     constexpr bool is_empty() const { return bits_ == kEmptyBits; }
     constexpr bool is_leaf() const { return (bits_ & kLeafBit) != 0; }
-    constexpr bool is_inner() const { return !is_leaf() && !is_empty(); }
+    // Inner ids lie below kEmptyBits, leaves (top bit set) above: one compare.
+    constexpr bool is_inner() const { return bits_ < kEmptyBits; }
     constexpr std::uint32_t node_id() const { return bits_; }
     constexpr std::uint32_t first_prim() const { return bits_ & kMaxFirst; }
     constexpr std::uint32_t prim_count() const { return ((bits_ >> kCountShift) & 0xfu) + 1; }
