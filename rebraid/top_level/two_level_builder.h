@@ -22,8 +22,9 @@ inline BuildSettings default_top_level_settings() {
 TopLevelBvh build_two_level(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                             const BuildSettings& settings = default_top_level_settings());
 
-/// Builds a top-level BVH over `items` whose world bounds and prim counts are given; shared
-/// by the plain and re-braided builders for the final emission.
+/// Builds a top-level BVH over `items` whose world bounds and prim counts are given (the
+/// plain builder's emission). Items name object nodes or whole object leaves: the result's
+/// has_partial_leaves is false.
 TopLevelBvh build_top_level_over_items(std::vector<TopLevelItem> items,
                                        std::vector<BBox3f> item_bounds,
                                        std::span<const std::uint32_t> item_prim_counts,
