@@ -388,17 +388,6 @@ enum class CostNeed { none, if_compared, always };
 TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettings& settings,
                                 CostNeed cost_need);
 
-/// The part of a top level's SAH cost (unnormalised) its own nodes and items make: the
-/// inner nodes' half areas and each item's box area, times its triangles for a leaf item.
-double top_level_own_cost(const TopLevelBvh& top) {
-    double cost = top_inner_cost(top);
-    for (std::size_t i = 0; i < top.items.size(); ++i) {
-        const NodeRef node = top.items[i].object_node;
-        cost += double(top.item_bounds[i].half_area()) * (node.is_leaf() ? node.prim_count() : 1);
-    }
-    return cost;
-}
-
 /// The budget search (RebraidSettings::budget_doublings): `first` is the tracked build at the
 /// rule's budget. When it used at least budget_search_min_use of its budget, the budget is
 /// doubled once; when that lowered the exact cost by at least budget_search_min_gain (and the

@@ -23,4 +23,9 @@ namespace rebraid {
 double cost_above_objects(const TopLevelBvh& top, std::span<const std::uint32_t> item_slots,
                           std::span<const double> node_cost, std::span<const double> removed_cost);
 
+/// The part of that cost the top level's own nodes and boxes make: Σ top inner nodes
+/// A(node) + Σ items A(item box) · k(item), without the object terms. The budget search
+/// measures a doubling's gain against it.
+double top_level_own_cost(const TopLevelBvh& top);
+
 }  // namespace rebraid
