@@ -186,4 +186,21 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
     return opened;
 }
 
+std::vector<std::uint32_t> brefs_to_open(std::span<const BuildPrim> prims,
+                                         std::span<const BRefTarget> targets,
+                                         const OpeningCriterion& criterion,
+                                         const BRefSource& source, std::uint32_t free_space) {
+    std::vector<std::uint32_t> chosen;
+    std::uint64_t offset = 0;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        const BRefTarget& target = targets[prims[i].id];
+        if (!criterion.wants_to_open(prims[i], target, i)) continue;
+        const std::uint32_t extra = extra_children(target, source);
+        if (offset + extra > free_space) break;
+        offset += extra;
+        chosen.push_back(std::uint32_t(i));
+    }
+    return chosen;
+}
+
 }  // namespace rebraid

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "rebraid/bvh/binned_split.h"
 #include "rebraid/bvh/object_bvh.h"
@@ -64,5 +65,14 @@ std::uint32_t open_brefs(BRefSegment& segment, std::span<BuildPrim> prims,
                          std::span<BRefTarget> targets, const OpeningCriterion& criterion,
                          const BRefSource& source, std::size_t parallel_threshold,
                          RangeInfo* resulting_info = nullptr);
+
+/// The BRefs open_brefs opens among `prims` (a segment's, from its start) under `criterion`
+/// with `free_space` slots for extra children, as indices into `prims` in array order: those
+/// the criterion picks while their children fit; the first that does not fit leaves it and
+/// every later one closed. For estimates that must open what open_brefs would.
+std::vector<std::uint32_t> brefs_to_open(std::span<const BuildPrim> prims,
+                                         std::span<const BRefTarget> targets,
+                                         const OpeningCriterion& criterion,
+                                         const BRefSource& source, std::uint32_t free_space);
 
 }  // namespace rebraid

@@ -119,26 +119,6 @@ double estimate_top_cost(std::span<BuildPrim> boxes, const RangeInfo& info,
     return cost;
 }
 
-/// Indices (into `prims`) of the BRefs an opening would open: those `criterion` picks, in
-/// array order, while their extra BRefs fit in `free_space`; the first that does not fit
-/// leaves it and every later one closed, as open_brefs does.
-std::vector<std::uint32_t> brefs_to_open(std::span<const BuildPrim> prims,
-                                         std::span<const BRefTarget> targets,
-                                         const OpeningCriterion& criterion,
-                                         const BRefSource& source, std::uint32_t free_space) {
-    std::vector<std::uint32_t> chosen;
-    std::uint64_t offset = 0;
-    for (std::size_t i = 0; i < prims.size(); ++i) {
-        const BRefTarget& target = targets[prims[i].id];
-        if (!criterion.wants_to_open(prims[i], target, i)) continue;
-        const std::uint32_t extra = bref_child_count(source, target) - 1;
-        if (offset + extra > free_space) break;
-        offset += extra;
-        chosen.push_back(std::uint32_t(i));
-    }
-    return chosen;
-}
-
 /// Fills source.child_bounds for the BRefs of `to_open` to inner nodes, several BRefs per
 /// task: each costs a search of its object BVH per child face, and the estimate would
 /// otherwise make them one after the other. BRefs of instances whose transform takes boxes
