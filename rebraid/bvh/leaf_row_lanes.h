@@ -24,7 +24,7 @@ public:
     template <class OnFull>
     void add(NodeRef leaf, OnFull&& on_full) {
         const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
-        const float* base = rows_ + std::size_t(9) * first;
+        const float* base = leaf_rows_at(rows_, first);
         if (count_ + count <= kTriangleGroupSize) {  // the common case: the leaf fits
             segments_[segment_count_++] = {base, count, count_, first};
             count_ += count;

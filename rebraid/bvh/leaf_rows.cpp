@@ -9,7 +9,7 @@ namespace rebraid {
 
 void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, float* rows) {
     const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
-    float* out = rows + kLeafRowPadding + std::size_t(9) * first;
+    float* out = rows + kLeafRowPadding + std::size_t(kRowFloatsPerTriangle) * first;
     for (std::uint32_t i = 0; i < count; ++i) {
         const TriangleVerts& t = triangles[first + i];
         const Vec3f corners[3] = {t.v0, t.v1, t.v2};
@@ -20,7 +20,7 @@ void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, float* rows) 
 
 void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
                        const std::vector<TriangleVerts>& triangles, std::vector<float>& rows) {
-    if (rows.size() != 9 * triangles.size() + 2 * kLeafRowPadding)
+    if (rows.size() != kRowFloatsPerTriangle * triangles.size() + 2 * kLeafRowPadding)
         throw Error("rewrite_leaf_rows: " + std::to_string(rows.size()) + " floats for " +
                     std::to_string(triangles.size()) + " triangles (internal error)");
     if (root.is_empty()) return;
@@ -44,8 +44,8 @@ std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef ro
     // On huge pages when large, as the corners are: rays in random order touch rows all
     // over the array, and with 4 KB pages nearly every access would also miss the TLB.
     std::vector<float> rows;
-    reserve_on_huge_pages(rows, 9 * triangles.size() + 2 * kLeafRowPadding);
-    rows.resize(9 * triangles.size() + 2 * kLeafRowPadding, 0.0f);
+    reserve_on_huge_pages(rows, kRowFloatsPerTriangle * triangles.size() + 2 * kLeafRowPadding);
+    rows.resize(kRowFloatsPerTriangle * triangles.size() + 2 * kLeafRowPadding, 0.0f);
     rewrite_leaf_rows(nodes, root, triangles, rows);
     return rows;
 }

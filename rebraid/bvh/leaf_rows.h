@@ -12,6 +12,15 @@ namespace rebraid {
 /// up to this many floats before the leaf and run as far past it.
 inline constexpr std::uint32_t kLeafRowPadding = 8;
 
+/// Floats of rows per triangle: 3 corners by 3 axes.
+inline constexpr std::uint32_t kRowFloatsPerTriangle = 9;
+
+/// The rows of the leaf whose triangles start at leaf-order position `first` (`rows` past the
+/// leading padding); row r of a leaf of n triangles starts n * r floats further.
+inline const float* leaf_rows_at(const float* rows, std::uint32_t first) {
+    return rows + std::size_t(kRowFloatsPerTriangle) * first;
+}
+
 /// The corners of every leaf's triangles stored pre-arranged for the SIMD group test: the
 /// leaf at leaf-order positions [p, p + n) holds 9 rows of n floats at floats [9p, 9p + 9n)
 /// (after the leading padding), row 3c + a holding axis a of corner c of the leaf's

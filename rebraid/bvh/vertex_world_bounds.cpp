@@ -7,6 +7,8 @@
 #include <limits>
 #include <utility>
 
+#include "rebraid/bvh/leaf_rows.h"
+
 #ifdef __AVX2__
 #include <immintrin.h>
 #endif
@@ -111,7 +113,7 @@ unsigned above(const float* bounds, unsigned live, float limit) {
 /// largest in offer order, so the result is offer's, bit for bit.
 void raise_support_from_rows(const float* rows, NodeRef leaf, Vec3f d, Support& support) {
     const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
-    const float* leaf_rows = rows + std::size_t(9) * first;
+    const float* leaf_rows = leaf_rows_at(rows, first);
     const __m256 dx = _mm256_set1_ps(d.x), dy = _mm256_set1_ps(d.y), dz = _mm256_set1_ps(d.z);
     const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     for (std::uint32_t base = 0; base < count; base += kBvhWidth) {

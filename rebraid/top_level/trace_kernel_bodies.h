@@ -89,9 +89,11 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
     if (node.is_inner()) {
         prefetch_node(bvh.nodes, node);
     } else if (rows_serve(bvh, node, start_leaf)) {
-        // The cache lines of the leaf's 9 rows (36 bytes per triangle).
-        const auto first = reinterpret_cast<std::uintptr_t>(bvh.leaf_rows + 9 * node.first_prim());
-        const std::uintptr_t end = first + 36 * node.prim_count();
+        // The cache lines of the leaf's rows.
+        const auto first =
+            reinterpret_cast<std::uintptr_t>(leaf_rows_at(bvh.leaf_rows, node.first_prim()));
+        const std::uintptr_t end =
+            first + sizeof(float) * kRowFloatsPerTriangle * node.prim_count();
         for (std::uintptr_t line = first & ~std::uintptr_t(63); line < end; line += 64)
             __builtin_prefetch(reinterpret_cast<const void*>(line));
     } else {
