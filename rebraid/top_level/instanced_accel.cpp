@@ -75,8 +75,8 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     : object_bvhs_(std::move(object_bvhs)),
       top_(std::move(top)),
       build_info_(build_info),
-      simd_level_(default_simd_level()),
-      kernels_(&trace_kernels(simd_level_)) {
+      simd_level_(default_simd_level()) {
+    use_kernels(simd_level_);
     // The instance records count as top-level build time: a frame that moves instances makes
     // them again (a million instances: hundreds of milliseconds).
     const BuildTimer timer;
@@ -120,15 +120,25 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
 }
 
 Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {
-    return kernels_->instanced_intersect(*this, ray, counters);
+    return intersect_(*this, ray, counters);
 }
 
 bool InstancedAccel::occluded(const Ray& ray) const {
-    return kernels_->instanced_occluded(*this, ray);
+    return occluded_(*this, ray);
+}
+
+void InstancedAccel::use_kernels(SimdLevel level) {
+    const TraceKernels& kernels = trace_kernels(level);
+    // A top level of one item: no top-level traversal to run (TraceKernels::sole_item_*).
+    const bool is_sole_item = top_.root.is_leaf() && top_.root.prim_count() == 1;
+    intersect_ = is_sole_item ? kernels.sole_item_intersect : kernels.instanced_intersect;
+    occluded_ = is_sole_item ? kernels.sole_item_occluded : kernels.instanced_occluded;
+    intersect_located_ =
+        is_sole_item ? kernels.sole_item_intersect_located : kernels.instanced_intersect_located;
 }
 
 void InstancedAccel::set_simd_level(SimdLevel level) {
-    kernels_ = &trace_kernels(level);
+    use_kernels(level);
     simd_level_ = level;
 }
 

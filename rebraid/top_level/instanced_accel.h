@@ -42,7 +42,7 @@ public:
     /// glue calls it for every ray.
     LocatedHit intersect_located(const Ray& ray,
                                  const CloserHitObserver* observer = nullptr) const {
-        return kernels_->instanced_intersect_located(*this, ray, observer);
+        return intersect_located_(*this, ray, observer);
     }
 
     const TopLevelBvh& top_level() const { return top_; }
@@ -76,7 +76,14 @@ private:
     std::vector<ObjectBvhView> object_views_;
     AccelStats build_info_;
     SimdLevel simd_level_;
-    const TraceKernels* kernels_;
+    // The entry points of the kernel level the queries take: a top level of one item has
+    // queries of its own (TraceKernels::sole_item_intersect), chosen here once rather than
+    // tested in every query.
+    decltype(TraceKernels::instanced_intersect) intersect_ = nullptr;
+    decltype(TraceKernels::instanced_occluded) occluded_ = nullptr;
+    decltype(TraceKernels::instanced_intersect_located) intersect_located_ = nullptr;
+
+    void use_kernels(SimdLevel level);
 };
 
 /// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).

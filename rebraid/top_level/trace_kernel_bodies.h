@@ -79,6 +79,76 @@ private:
     std::optional<PreparedRay> ray_;
 };
 
+/// Tells `observer` (when not null) of each closer hit in `instance`.
+inline auto closer_hit_notifier(const CloserHitObserver* observer, InstanceId instance) {
+    return [observer, instance](const HitTriangle& triangle) {
+        if (observer != nullptr) observer->on_closer_hit(observer->context, instance, triangle);
+    };
+}
+
+/// Where a query of a top level that is one item starts (a scene of one instance that
+/// opening left whole; InstancedAccel takes these queries for such a structure): at the
+/// item's object node, with the ray prepared once in the item's space, as ObjectRayCache
+/// maps it. No top-level traversal, and no world-space ray unless the instance is placed by
+/// the identity, whose space is the world's: the query costs what a flat BVH's does, plus
+/// the mapping. The same hits, since the top level's root is then a leaf, whose box no
+/// traversal tests.
+struct SoleItemStart {
+    const TopLevelItem& item;
+    ObjectBvhView bvh;
+    StartLeaf start_leaf;
+    std::optional<PreparedRay> ray;
+
+    SoleItemStart(const InstancedAccel& accel, const Ray& world_ray)
+        : item(accel.top_level().items[accel.top_level().root.first_prim()]),
+          start_leaf(accel.top_level().has_partial_leaves ? StartLeaf::may_be_part
+                                                          : StartLeaf::whole) {
+        const InstanceTarget& target = accel.instance_targets()[item.instance_id];
+        bvh = accel.object_views()[target.mesh];
+        if (target.space == InstanceTarget::kWorldSpace) {
+            ray.emplace(world_ray.org, world_ray.dir, world_ray.tnear, world_ray.tfar);
+            return;
+        }
+        const AffineTransform& to_object = target.to_object;
+        ray.emplace(to_object.transform_point(world_ray.org),
+                    to_object.transform_vector(world_ray.dir), world_ray.tnear, world_ray.tfar);
+    }
+};
+
+/// The closest hit of a top level of one item (SoleItemStart); `located` and `observer` as for
+/// instanced_closest_hit.
+inline Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray,
+                                 TraversalCounters* counters, HitTriangle* located,
+                                 const CloserHitObserver* observer) {
+    SoleItemStart start(accel, ray);
+    if (counters) ++counters->object_entries;
+    Hit hit;
+    if (intersect_object_bvh(start.bvh, start.item.object_node, *start.ray, hit, counters, located,
+                             closer_hit_notifier(observer, start.item.instance_id),
+                             start.start_leaf))
+        hit.instance_id = start.item.instance_id;
+    return hit;
+}
+
+[[gnu::flatten]] inline Hit sole_item_intersect(const InstancedAccel& accel, const Ray& ray,
+                                                TraversalCounters* counters) {
+    return sole_item_closest_hit(accel, ray, counters, nullptr, nullptr);
+}
+
+[[gnu::flatten]] inline LocatedHit sole_item_intersect_located(const InstancedAccel& accel,
+                                                               const Ray& ray,
+                                                               const CloserHitObserver* observer) {
+    LocatedHit located;
+    located.hit = sole_item_closest_hit(accel, ray, nullptr, &located.triangle, observer);
+    return located;
+}
+
+[[gnu::flatten]] inline bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
+    SoleItemStart start(accel, ray);
+    return occluded_object_bvh(start.bvh, start.item.object_node, *start.ray, nullptr,
+                               start.start_leaf);
+}
+
 /// Prefetches what entering the first item of top-level leaf `leaf` reads first: its object
 /// node, or a leaf's triangles in the storage the traversal will read (object_traversal.h).
 inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* targets,
@@ -121,12 +191,9 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
             const InstanceTarget& target = targets[item.instance_id];
             if (counters) ++counters->object_entries;
             PreparedRay& object_ray = object_rays.ray_for(target);
-            const auto on_closer_hit = [observer, &item](const HitTriangle& triangle) {
-                if (observer != nullptr)
-                    observer->on_closer_hit(observer->context, item.instance_id, triangle);
-            };
             if (intersect_object_bvh(views[target.mesh], item.object_node, object_ray, hit,
-                                     counters, located, on_closer_hit, start_leaf)) {
+                                     counters, located,
+                                     closer_hit_notifier(observer, item.instance_id), start_leaf)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -179,9 +246,14 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
 }
 
 /// This level's entry points.
-inline constexpr TraceKernels kLevelTraceKernels{&flat_intersect, &flat_occluded,
-                                                 &instanced_intersect, &instanced_occluded,
-                                                 &instanced_intersect_located};
+inline constexpr TraceKernels kLevelTraceKernels{&flat_intersect,
+                                                 &flat_occluded,
+                                                 &instanced_intersect,
+                                                 &instanced_occluded,
+                                                 &instanced_intersect_located,
+                                                 &sole_item_intersect,
+                                                 &sole_item_occluded,
+                                                 &sole_item_intersect_located};
 
 }  // namespace REBRAID_SIMD_NAMESPACE
 }  // namespace rebraid

@@ -21,6 +21,13 @@ struct TraceKernels {
     bool (*instanced_occluded)(const InstancedAccel& accel, const Ray& ray);
     LocatedHit (*instanced_intersect_located)(const InstancedAccel& accel, const Ray& ray,
                                               const CloserHitObserver* observer);
+    /// The three instanced queries for a top level of one item (one instance left whole):
+    /// the ray prepared once, in the item's space, and no top-level traversal.
+    Hit (*sole_item_intersect)(const InstancedAccel& accel, const Ray& ray,
+                               TraversalCounters* counters);
+    bool (*sole_item_occluded)(const InstancedAccel& accel, const Ray& ray);
+    LocatedHit (*sole_item_intersect_located)(const InstancedAccel& accel, const Ray& ray,
+                                              const CloserHitObserver* observer);
 };
 
 /// The kernels of `level`. Throws rebraid::Error when this build or this CPU cannot run it.
