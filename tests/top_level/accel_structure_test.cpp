@@ -10,6 +10,7 @@
 #include "rebraid/core/error.h"
 #include "rebraid/core/simd_level.h"
 #include "rebraid/generators/default_scene.h"
+#include "rebraid/generators/mesh_generators.h"
 #include "rebraid/io/gltf_scene.h"
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/top_level/flat_accel.h"
@@ -205,6 +206,64 @@ TEST(InstancedAccel, ObserverHearsEveryCloserHitAndLastTheClosest) {
         EXPECT_GT(hits, rays.size() / 50);
         EXPECT_GE(calls, hits);
     });
+}
+
+/// The answers of `accel` to `rays`, bit for bit: closest hit, located triangle, occlusion.
+struct ExactAnswers {
+    std::vector<std::uint32_t> bits;
+
+    ExactAnswers(const InstancedAccel& accel, const std::vector<Ray>& rays) {
+        for (const Ray& ray : rays) {
+            const LocatedHit located = accel.intersect_located(ray);
+            const Hit hit = accel.intersect(ray);
+            for (const Hit& each : {located.hit, hit})
+                bits.insert(bits.end(), {std::bit_cast<std::uint32_t>(each.t), each.instance_id,
+                                         each.prim_id, std::bit_cast<std::uint32_t>(each.u),
+                                         std::bit_cast<std::uint32_t>(each.v)});
+            bits.push_back(located.triangle.leaf_position);
+            for (const Vec3f& corner : {located.triangle.corners.v0, located.triangle.corners.v1,
+                                        located.triangle.corners.v2})
+                for (int axis = 0; axis < 3; ++axis)
+                    bits.push_back(std::bit_cast<std::uint32_t>(corner[axis]));
+            bits.push_back(accel.occluded(ray));
+        }
+    }
+};
+
+// A top level of one item takes queries of its own (the ray mapped once, no top-level
+// traversal): they answer bit for bit as the general ones, made to run here by a second
+// instance far away that no ray reaches, for an instance in world space and a mapped one, at
+// every kernel level.
+TEST(InstancedAccel, TopLevelOfOneItemAnswersAsTheGeneralTraversal) {
+    for (const bool is_mapped : {false, true}) {
+        SCOPED_TRACE(is_mapped ? "mapped instance" : "instance in world space");
+        Scene alone;
+        alone.meshes.push_back(make_torus_knot());
+        alone.instances.push_back({0, is_mapped ? AffineTransform::translate({0.5f, -2.0f, 1.0f}) *
+                                                      AffineTransform::rotate({1, 2, 3}, 0.7f) *
+                                                      AffineTransform::scale({1.5f, 0.5f, 2.0f})
+                                                : AffineTransform::identity()});
+        Scene with_far = alone;
+        with_far.meshes.push_back(
+            {"far",
+             {{1e5f, 1e5f, 1e5f}, {1e5f + 1, 1e5f, 1e5f}, {1e5f, 1e5f + 1, 1e5f}},
+             {{0, 1, 2}}});
+        with_far.instances.push_back({1, AffineTransform::identity()});
+        InstancedAccel sole = build_two_level_accel(alone);
+        InstancedAccel general = build_two_level_accel(with_far);
+        ASSERT_TRUE(sole.top_level().root.is_leaf());
+        ASSERT_TRUE(general.top_level().root.is_inner());
+        const std::vector<Ray> rays = test::varied_rays(sole, alone.bounds(), 4000, 3);
+        std::size_t hits = 0;
+        for (const Ray& ray : rays) hits += sole.intersect(ray).is_hit();
+        EXPECT_GT(hits, rays.size() / 50);  // the comparison sees hits
+        for (SimdLevel level : runnable_simd_levels()) {
+            SCOPED_TRACE(std::string(simd_level_name(level)));
+            sole.set_simd_level(level);
+            general.set_simd_level(level);
+            EXPECT_TRUE(ExactAnswers(sole, rays).bits == ExactAnswers(general, rays).bits);
+        }
+    }
 }
 
 TEST(TwoLevelAccel, ManyInstancesPlacedAlikeShareTheSpaceOfTheFirst) {
