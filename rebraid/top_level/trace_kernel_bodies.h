@@ -50,9 +50,9 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 
 /// `org` and `dir` mapped by `to_object` into an instance's object space. Every query maps
 /// rays with this one function, so a ray has the same bits in an object space whichever query
-/// mapped it. The SIMD form sums each column's products in the scalar form's order, with a
-/// multiply-add per column after the first: a third of the scalar form's instructions, paid
-/// at every entry into another space.
+/// mapped it. The SIMD form maps all three axes at once, a multiply-add per column after the
+/// first, where the scalar form takes each product and sum on its own: every entry into
+/// another space pays it.
 inline void map_into_object_space(const AffineTransform& to_object, Vec3f org, Vec3f dir,
                                   Vec3f& object_org, Vec3f& object_dir) {
 #ifdef REBRAID_SIMD_AVX2
