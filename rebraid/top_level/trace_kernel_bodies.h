@@ -108,6 +108,11 @@ private:
     std::optional<PreparedRay> ray_;
 };
 
+/// What a leaf item of `top` may be (StartLeaf): part of a leaf only where opening split leaves.
+inline StartLeaf start_leaf_of(const TopLevelBvh& top) {
+    return top.has_partial_leaves ? StartLeaf::may_be_part : StartLeaf::whole;
+}
+
 /// Tells `observer` (when not null) of each closer hit in `instance`.
 inline auto closer_hit_notifier(const CloserHitObserver* observer, InstanceId instance) {
     return [observer, instance](const HitTriangle& triangle) {
@@ -130,8 +135,7 @@ struct SoleItemStart {
 
     SoleItemStart(const InstancedAccel& accel, const Ray& world_ray)
         : item(accel.top_level().items[accel.top_level().root.first_prim()]),
-          start_leaf(accel.top_level().has_partial_leaves ? StartLeaf::may_be_part
-                                                          : StartLeaf::whole) {
+          start_leaf(start_leaf_of(accel.top_level())) {
         const InstanceTarget& target = accel.instance_targets()[item.instance_id];
         bvh = accel.object_views()[target.mesh];
         if (target.space == InstanceTarget::kWorldSpace) {
@@ -157,19 +161,6 @@ inline Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray,
                              start.start_leaf))
         hit.instance_id = start.item.instance_id;
     return hit;
-}
-
-[[gnu::flatten]] inline Hit sole_item_intersect(const InstancedAccel& accel, const Ray& ray,
-                                                TraversalCounters* counters) {
-    return sole_item_closest_hit(accel, ray, counters, nullptr, nullptr);
-}
-
-[[gnu::flatten]] inline LocatedHit sole_item_intersect_located(const InstancedAccel& accel,
-                                                               const Ray& ray,
-                                                               const CloserHitObserver* observer) {
-    LocatedHit located;
-    located.hit = sole_item_closest_hit(accel, ray, nullptr, &located.triangle, observer);
-    return located;
 }
 
 [[gnu::flatten]] inline bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
@@ -205,14 +196,14 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
 /// told of each closer hit.
 inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
                                  TraversalCounters* counters, HitTriangle* located,
-                                 const CloserHitObserver* observer = nullptr) {
+                                 const CloserHitObserver* observer) {
     Hit hit;
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray);
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
     const ObjectBvhView* views = accel.object_views().data();
-    const StartLeaf start_leaf = top.has_partial_leaves ? StartLeaf::may_be_part : StartLeaf::whole;
+    const StartLeaf start_leaf = start_leaf_of(top);
     const auto enter_items = [&](NodeRef leaf) {
         const std::uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (std::uint32_t i = leaf.first_prim(); i < end; ++i) {
@@ -238,16 +229,21 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
     return hit;
 }
 
-[[gnu::flatten]] inline Hit instanced_intersect(const InstancedAccel& accel, const Ray& ray,
-                                                TraversalCounters* counters) {
-    return instanced_closest_hit(accel, ray, counters, nullptr);
+// The two entry points of a closest-hit query of an instanced structure (the general one,
+// instanced_closest_hit, and the one-item one, sole_item_closest_hit): the plain hit, and the
+// located hit with its observer.
+
+template <auto closest_hit>
+[[gnu::flatten]] Hit intersect_entry(const InstancedAccel& accel, const Ray& ray,
+                                     TraversalCounters* counters) {
+    return closest_hit(accel, ray, counters, nullptr, nullptr);
 }
 
-[[gnu::flatten]] inline LocatedHit instanced_intersect_located(const InstancedAccel& accel,
-                                                               const Ray& ray,
-                                                               const CloserHitObserver* observer) {
+template <auto closest_hit>
+[[gnu::flatten]] LocatedHit intersect_located_entry(const InstancedAccel& accel, const Ray& ray,
+                                                    const CloserHitObserver* observer) {
     LocatedHit located;
-    located.hit = instanced_closest_hit(accel, ray, nullptr, &located.triangle, observer);
+    located.hit = closest_hit(accel, ray, nullptr, &located.triangle, observer);
     return located;
 }
 
@@ -257,7 +253,7 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
     const ObjectBvhView* views = accel.object_views().data();
-    const StartLeaf start_leaf = top.has_partial_leaves ? StartLeaf::may_be_part : StartLeaf::whole;
+    const StartLeaf start_leaf = start_leaf_of(top);
     // Any order: the first hit ends the query.
     return traverse_bvh<TraversalOrder::any>(
         top.nodes.data(), top.root, world_ray, nullptr, [&](NodeRef leaf) {
@@ -277,12 +273,12 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
 /// This level's entry points.
 inline constexpr TraceKernels kLevelTraceKernels{&flat_intersect,
                                                  &flat_occluded,
-                                                 &instanced_intersect,
+                                                 &intersect_entry<&instanced_closest_hit>,
                                                  &instanced_occluded,
-                                                 &instanced_intersect_located,
-                                                 &sole_item_intersect,
+                                                 &intersect_located_entry<&instanced_closest_hit>,
+                                                 &intersect_entry<&sole_item_closest_hit>,
                                                  &sole_item_occluded,
-                                                 &sole_item_intersect_located};
+                                                 &intersect_located_entry<&sole_item_closest_hit>};
 
 }  // namespace REBRAID_SIMD_NAMESPACE
 }  // namespace rebraid
