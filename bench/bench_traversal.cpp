@@ -17,10 +17,10 @@
 // --rays: rays per kind and scene (default 200000; primary rays round it to a square image);
 // --threads: tracing threads (default 1: single-ray speed, timed by the thread's CPU time;
 // more: wall-clock time); --rounds: rounds of the compare benchmarks (default 5);
-// --leaf-size, --intersection-cost, --fill-nodes 0|1, --max-children N, --pre-arranged-leaves
-// 0|1: BuildSettings of the flat and object BVHs (default: the builder's defaults), to measure how
-// the tree shape changes traversal speed. Structures are built once per scene, outside the timed
-// loops.
+// --leaf-size, --intersection-cost, --collapse greedy|optimal, --fill-nodes 0|1 (with greedy),
+// --max-children N, --pre-arranged-leaves 0|1: BuildSettings of the flat and object BVHs (default:
+// the builder's defaults), to measure how the tree shape changes traversal speed. Structures are
+// built once per scene, outside the timed loops.
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -36,6 +36,7 @@
 #include <iostream>
 #include <memory>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -311,8 +312,15 @@ int run(int argc, char** argv) {
         bench.build.max_leaf_size = std::uint32_t(std::stoul(v));
     if (std::string v = take_flag(argc, argv, "--intersection-cost"); !v.empty())
         bench.build.intersection_cost = std::stof(v);
-    if (std::string v = take_flag(argc, argv, "--fill-nodes"); !v.empty())
+    if (std::string v = take_flag(argc, argv, "--collapse"); !v.empty()) {
+        if (v != "greedy" && v != "optimal")
+            throw std::invalid_argument("--collapse takes greedy or optimal, not " + v);
+        bench.build.collapse = v == "greedy" ? NodeCollapse::greedy : NodeCollapse::optimal;
+    }
+    if (std::string v = take_flag(argc, argv, "--fill-nodes"); !v.empty()) {
         bench.build.fill_nodes = v != "0";
+        if (bench.build.fill_nodes) bench.build.collapse = NodeCollapse::greedy;  // needs it
+    }
     if (std::string v = take_flag(argc, argv, "--max-children"); !v.empty())
         bench.build.max_children = std::uint32_t(std::stoul(v));
     if (std::string v = take_flag(argc, argv, "--pre-arranged-leaves"); !v.empty())
@@ -327,6 +335,8 @@ int run(int argc, char** argv) {
     benchmark::AddCustomContext("leaf_size", std::to_string(bench.build.max_leaf_size));
     benchmark::AddCustomContext("intersection_cost", std::to_string(bench.build.intersection_cost));
     benchmark::AddCustomContext("fill_nodes", bench.build.fill_nodes ? "1" : "0");
+    benchmark::AddCustomContext(
+        "collapse", bench.build.collapse == NodeCollapse::greedy ? "greedy" : "optimal");
     benchmark::AddCustomContext("max_children", std::to_string(bench.build.max_children));
     benchmark::AddCustomContext("pre_arranged_leaves", bench.build.pre_arranged_leaves ? "1" : "0");
 

@@ -29,6 +29,13 @@ void BuildSettings::validate() const {
     if (max_children < 2 || max_children > std::uint32_t(kBvhWidth))
         throw Error("BuildSettings: max_children " + std::to_string(max_children) +
                     " is outside 2.." + std::to_string(kBvhWidth));
+    if (collapse != NodeCollapse::greedy && collapse != NodeCollapse::optimal)
+        throw Error("BuildSettings: collapse " + std::to_string(int(collapse)) +
+                    " is neither greedy nor optimal");
+    if (fill_nodes && collapse != NodeCollapse::greedy)
+        throw Error(
+            "BuildSettings: fill_nodes needs collapse greedy (the optimal collapse keeps "
+            "the SAH's leaves)");
     if (task_threshold < 1)
         throw Error("BuildSettings: task_threshold " + std::to_string(task_threshold) +
                     " must be >= 1");

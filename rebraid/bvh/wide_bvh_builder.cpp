@@ -12,9 +12,10 @@
 
 #include "rebraid/bvh/binned_split.h"
 #include "rebraid/bvh/exact_split.h"
+#include "rebraid/bvh/optimal_wide_tree_grower.h"
+#include "rebraid/core/error.h"
 #include "rebraid/core/huge_pages.h"
 #include "rebraid/core/scratch_buffer.h"
-#include "rebraid/core/error.h"
 
 namespace rebraid {
 namespace {
@@ -24,13 +25,15 @@ namespace {
 struct Candidate {
     std::uint32_t begin = 0, end = 0;
     RangeInfo info;
-    float area = 0.0f;  ///< info.bounds.half_area(), which node growth compares often
+    float half_area = 0.0f;  ///< info.bounds.half_area(), which node growth compares often
     BinnedSplit split;
     bool is_leaf = true;
     /// Which buffer holds the range's prims: binned splits partition from one buffer into
     /// the other (the caller's array or the scratch), which saves copying back every time.
     bool in_scratch = false;
     std::uint32_t size() const { return end - begin; }
+    float area() const { return half_area; }
+    BBox3f bounds() const { return info.bounds; }
 };
 
 /// The nodes one task built, node 0 being its subtree's root, with local node ids. Subtrees
@@ -100,9 +103,9 @@ public:
             c.is_leaf = n <= settings_.max_leaf_size;
             return c;
         }
-        const float leaf_cost = settings_.intersection_cost * c.area * float(info.weight);
+        const float leaf_cost = settings_.intersection_cost * c.half_area * float(info.weight);
         const float split_cost =
-            settings_.traversal_cost * c.area + settings_.intersection_cost * c.split.cost;
+            settings_.traversal_cost * c.half_area + settings_.intersection_cost * c.split.cost;
         c.is_leaf = n <= settings_.max_leaf_size && leaf_cost <= split_cost;
         return c;
     }
@@ -178,8 +181,8 @@ public:
             float largest = -1.0f;
             for (int i = 0; i < kid_count; ++i)
                 if ((!kids[i].is_leaf || (settings_.fill_nodes && kids[i].size() > 1)) &&
-                    kids[i].area > largest) {
-                    largest = kids[i].area;
+                    kids[i].half_area > largest) {
+                    largest = kids[i].half_area;
                     pick = i;
                 }
             if (pick < 0) break;
@@ -254,6 +257,12 @@ WideBvh build_wide_bvh(std::span<BuildPrim> prims, const BuildSettings& settings
     bvh.bounds = info.bounds;
     if (root.is_leaf) {
         bvh.root = NodeRef::leaf(0, root.size());
+        return bvh;
+    }
+    if (settings.collapse == NodeCollapse::optimal) {
+        const OptimalWideTreeGrower<WideBvhBuilder, Candidate> grower(
+            builder, settings.task_threshold, settings.max_children);
+        bvh.root = grower.grow(root, bvh.nodes);
         return bvh;
     }
     const std::unique_ptr<NodeChunk> chunk = builder.make_chunk(root.size());

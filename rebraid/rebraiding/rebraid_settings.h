@@ -165,8 +165,9 @@ struct RebraidSettings {
     /// BRef: max_leaf_size is 1). Subtrees of 32 BRefs and more are tasks of their own (an
     /// object build's threshold is 1,024 primitives): a BRef costs microseconds here (opening
     /// estimates, children's vertex bounds), and at 1,024 a top of a few hundred instances
-    /// ran on one thread. The tree does not depend on it.
-    BuildSettings build{.max_leaf_size = 1, .task_threshold = 32};
+    /// ran on one thread. The tree does not depend on it. Nodes are filled greedily, as every
+    /// top level's (default_top_level_settings()).
+    BuildSettings build{.max_leaf_size = 1, .task_threshold = 32, .collapse = NodeCollapse::greedy};
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

@@ -14,6 +14,7 @@
 #include "rebraid/top_level/located_hit.h"
 #include "rebraid/top_level/top_level_bvh.h"
 #include "rebraid/top_level/trace_kernels.h"
+#include "rebraid/top_level/two_level_builder.h"
 
 namespace rebraid {
 
@@ -89,6 +90,6 @@ private:
 /// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).
 InstancedAccel build_two_level_accel(
     const Scene& scene, const ObjectBvhBuilder& object_builder = own_object_bvh_builder(),
-    const BuildSettings& top_settings = {.max_leaf_size = 1});
+    const BuildSettings& top_settings = default_top_level_settings());
 
 }  // namespace rebraid

@@ -9,10 +9,16 @@
 
 namespace rebraid {
 
-/// Settings of the plain top-level builder: one top-level leaf per instance.
+/// Settings of the plain top-level builder: one top-level leaf per instance, nodes filled
+/// greedily. The optimal collapse lowers a top level's node cost too, but its nodes then mix
+/// large subtrees with single instances, and the closest-hit order by entry distance enters
+/// the large ones too early: the re-braided top of two_cylinder_engine (its 67 instances,
+/// none opened) built so took 3.6 % more instructions per primary ray (docs/design.md,
+/// "Leaves").
 inline BuildSettings default_top_level_settings() {
     BuildSettings settings;
     settings.max_leaf_size = 1;
+    settings.collapse = NodeCollapse::greedy;
     return settings;
 }
 

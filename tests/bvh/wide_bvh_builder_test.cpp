@@ -9,6 +9,8 @@
 #include <bit>
 #include <cstring>
 #include <numeric>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "rebraid/bvh/binned_split.h"
@@ -95,8 +97,10 @@ TEST(WideBvhBuilder, MaxChildrenNarrowsNodesAndFillNodesFillsThem) {
     // leaves stay unsplit.
     std::vector<BuildPrim> full_prims = make_triangle_build_prims(mesh);
     std::vector<BuildPrim> sparse_prims = full_prims;
-    const WideBvh full = build_wide_bvh(full_prims, {.fill_nodes = true});
-    const WideBvh sparse = build_wide_bvh(sparse_prims, {.fill_nodes = false});
+    const WideBvh full =
+        build_wide_bvh(full_prims, {.fill_nodes = true, .collapse = NodeCollapse::greedy});
+    const WideBvh sparse =
+        build_wide_bvh(sparse_prims, {.fill_nodes = false, .collapse = NodeCollapse::greedy});
     expect_valid_tree(full, full_prims, BuildSettings{}.max_leaf_size);
     expect_valid_tree(sparse, sparse_prims, BuildSettings{}.max_leaf_size);
     auto mean_children = [](const WideBvh& bvh) {
@@ -174,19 +178,84 @@ void add_shape(StructureHash& hash, const WideBvh& bvh, std::span<const BuildPri
     }
 }
 
+// The greedy collapse numbers the subtrees that tasks built after their parents' other
+// nodes, so the task threshold changes the numbering (never the shape); the optimal collapse
+// numbers every node depth first once the whole tree is known, so nothing changes.
 TEST(WideBvhBuilder, TaskThresholdChangesNumberingOnly) {
     const Mesh mesh = test::make_triangle_soup(20000, 5);
-    std::vector<std::uint64_t> shapes, hashes;
-    for (std::size_t task_threshold : {std::size_t(16), std::size_t(1) << 30}) {
-        std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
-        const WideBvh bvh = build_wide_bvh(prims, {.task_threshold = task_threshold});
-        StructureHash shape;
-        add_shape(shape, bvh, prims, bvh.root);
-        shapes.push_back(shape.value());
-        hashes.push_back(tree_hash(bvh, prims));
+    for (NodeCollapse collapse : {NodeCollapse::greedy, NodeCollapse::optimal}) {
+        std::vector<std::uint64_t> shapes, hashes;
+        for (std::size_t task_threshold : {std::size_t(16), std::size_t(1) << 30}) {
+            std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
+            const WideBvh bvh =
+                build_wide_bvh(prims, {.task_threshold = task_threshold, .collapse = collapse});
+            StructureHash shape;
+            add_shape(shape, bvh, prims, bvh.root);
+            shapes.push_back(shape.value());
+            hashes.push_back(tree_hash(bvh, prims));
+        }
+        EXPECT_EQ(shapes[0], shapes[1]);
+        if (collapse == NodeCollapse::greedy)
+            EXPECT_NE(hashes[0], hashes[1]) << "one task builds all: expected another numbering";
+        else
+            EXPECT_EQ(hashes[0], hashes[1]);
     }
-    EXPECT_EQ(shapes[0], shapes[1]);
-    EXPECT_NE(hashes[0], hashes[1]) << "one task builds all: expected another numbering";
+}
+
+/// The SAH's node cost of a tree: the half areas of its inner nodes' boxes.
+double node_cost(const WideBvh& bvh, NodeRef ref, const BBox3f& box) {
+    if (!ref.is_inner()) return 0.0;
+    const WideNode& node = bvh.nodes[ref.node_id()];
+    double cost = box.half_area();
+    for (int i = 0; i < node.child_count(); ++i)
+        cost += node_cost(bvh, node.children[i], node.child_bounds(i));
+    return cost;
+}
+
+/// The leaves of a tree as (first prim's id, count), sorted.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves_of(const WideBvh& bvh,
+                                                               std::span<const BuildPrim> prims) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves;
+    std::vector<NodeRef> stack{bvh.root};
+    while (!stack.empty()) {
+        const NodeRef ref = stack.back();
+        stack.pop_back();
+        if (ref.is_leaf()) {
+            leaves.emplace_back(prims[ref.first_prim()].id, ref.prim_count());
+            continue;
+        }
+        const WideNode& node = bvh.nodes[ref.node_id()];
+        for (int i = 0; i < node.child_count(); ++i) stack.push_back(node.children[i]);
+    }
+    std::sort(leaves.begin(), leaves.end());
+    return leaves;
+}
+
+// Both collapses cut the same binary tree of splits into wide nodes: the same leaves, and the
+// optimal cut's node cost is never above the greedy one's (and below it on these inputs, at
+// every node width and leaf size tried).
+TEST(WideBvhBuilder, OptimalCollapseKeepsTheLeavesAndLowersTheNodeCost) {
+    for (std::uint64_t seed : {3u, 4u}) {
+        const Mesh mesh = test::make_triangle_soup(5000, seed);
+        for (std::uint32_t max_leaf : {1u, 8u})
+            for (std::uint32_t width : {4u, 8u}) {
+                SCOPED_TRACE("seed " + std::to_string(seed) + ", leaves of " +
+                             std::to_string(max_leaf) + ", width " + std::to_string(width));
+                std::vector<BuildPrim> greedy_prims = make_triangle_build_prims(mesh);
+                std::vector<BuildPrim> optimal_prims = greedy_prims;
+                const BuildSettings greedy{.max_leaf_size = max_leaf,
+                                           .collapse = NodeCollapse::greedy,
+                                           .max_children = width};
+                BuildSettings optimal = greedy;
+                optimal.collapse = NodeCollapse::optimal;
+                const WideBvh a = build_wide_bvh(greedy_prims, greedy);
+                const WideBvh b = build_wide_bvh(optimal_prims, optimal);
+                expect_valid_tree(b, optimal_prims, max_leaf);
+                EXPECT_LE(widest_node(b), int(width));
+                EXPECT_EQ(leaves_of(a, greedy_prims), leaves_of(b, optimal_prims));
+                EXPECT_LT(node_cost(b, b.root, b.bounds), node_cost(a, a.root, a.bounds));
+            }
+    }
 }
 
 std::vector<BuildPrim> soup_prims(std::uint32_t count, std::uint64_t seed) {
