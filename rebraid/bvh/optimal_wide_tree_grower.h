@@ -52,16 +52,17 @@ public:
 private:
     static constexpr int kSlots = kBvhWidth;
 
-    /// A node of the binary tree of splits, with the best cost of its subtree for each number
-    /// of slots it may take in its parent.
+    /// The least node cost of a subtree in at most k slots of its parent, at [k - 1].
+    using Costs = std::array<float, kSlots>;
+
+    /// A node of the binary tree of splits, with how its subtree is best cut for each number
+    /// of slots it may take in its parent (its costs go to the parent and are not kept: the
+    /// binary tree lives until the cut is made, and is the build's largest extra memory).
     struct BinaryNode {
         BBox3f bounds;
-        float area = 0.0f;
         NodeRef leaf;  ///< for a leaf
         const BinaryNode* left = nullptr;
         const BinaryNode* right = nullptr;
-        /// cost[k - 1]: the least node cost of the subtree in at most k slots.
-        std::array<float, kSlots> cost{};
         /// shape[k - 1]: 0 when the best form in at most k slots is one wide node, else the
         /// number of slots j (2..k) its children share.
         std::array<std::uint8_t, kSlots> shape{};
@@ -84,67 +85,67 @@ private:
         std::vector<std::unique_ptr<std::deque<BinaryNode>>> arenas_;
     };
 
-    /// Builds the subtree of `c` (not a leaf) into `node` and works out its costs.
-    void build(const Candidate& c, std::uint32_t depth, BinaryNode& node, Arenas& arenas,
-               std::deque<BinaryNode>& arena) const {
+    /// Builds the subtree of `c` (not a leaf) into `node`; returns its costs.
+    Costs build(const Candidate& c, std::uint32_t depth, BinaryNode& node, Arenas& arenas,
+                std::deque<BinaryNode>& arena) const {
         node.bounds = c.bounds();
-        node.area = c.area();
         // Median splits past the SAH depth limit bound the binary depth, and with it the
         // wide tree's (never deeper than the binary one), by kMaxBvhDepth.
         const bool median_only = depth + 1 >= std::uint32_t(kSahDepthLimit);
         std::array<Candidate, 2> halves = policy_.split(c, median_only);
         std::array<BinaryNode*, 2> kids{&arena.emplace_back(), &arena.emplace_back()};
+        std::array<Costs, 2> kid_costs{};  // a leaf costs nothing in any number of slots
         std::optional<tbb::task_group> tasks;
         for (int h = 0; h < 2; ++h) {
             const Candidate& half = halves[h];
             BinaryNode& kid = *kids[h];
             if (half.is_leaf) {
                 kid.bounds = half.bounds();
-                kid.area = half.area();
                 kid.leaf = policy_.make_leaf(half);
             } else if (h == 0 && half.size() >= task_threshold_) {
                 if (!tasks) tasks.emplace();
-                tasks->run([this, &half, depth, &kid, &arenas] {
-                    build(half, depth + 1, kid, arenas, arenas.add());
+                tasks->run([this, &half, depth, &kid, &arenas, &costs = kid_costs[0]] {
+                    costs = build(half, depth + 1, kid, arenas, arenas.add());
                 });
             } else {
-                build(half, depth + 1, kid, arenas, arena);
+                kid_costs[h] = build(half, depth + 1, kid, arenas, arena);
             }
         }
         if (tasks) tasks->wait();
         node.left = kids[0];
         node.right = kids[1];
-        work_out_costs(node, slots_);
+        return work_out_costs(node, c.area(), kid_costs[0], kid_costs[1], slots_);
     }
 
-    /// The costs of `node` in each number of slots up to `slots`, from its children's.
-    static void work_out_costs(BinaryNode& node, int slots) {
-        const BinaryNode& left = *node.left;
-        const BinaryNode& right = *node.right;
+    /// The costs of `node` (of box area `area`) in each number of slots up to `slots`, from
+    /// its children's, recording the best cut for each in `node`.
+    static Costs work_out_costs(BinaryNode& node, float area, const Costs& left, const Costs& right,
+                                int slots) {
         constexpr float kNone = std::numeric_limits<float>::infinity();
         // The children sharing j slots: each takes at least one.
         std::array<float, kSlots + 1> shared{};
         for (int j = 2; j <= slots; ++j) {
             shared[j] = kNone;
             for (int i = 1; i < j; ++i) {
-                const float cost = left.cost[i - 1] + right.cost[j - i - 1];
+                const float cost = left[i - 1] + right[j - i - 1];
                 if (cost < shared[j]) {
                     shared[j] = cost;
                     node.left_slots[j - 1] = std::uint8_t(i);
                 }
             }
         }
-        const float as_node = node.area + shared[slots];
-        node.cost[0] = as_node;
+        Costs costs{};
+        costs[0] = area + shared[slots];
         node.shape[0] = 0;
         for (int k = 2; k <= slots; ++k) {
-            node.cost[k - 1] = node.cost[k - 2];
+            costs[k - 1] = costs[k - 2];
             node.shape[k - 1] = node.shape[k - 2];
-            if (shared[k] < node.cost[k - 1]) {
-                node.cost[k - 1] = shared[k];
+            if (shared[k] < costs[k - 1]) {
+                costs[k - 1] = shared[k];
                 node.shape[k - 1] = std::uint8_t(k);
             }
         }
+        return costs;
     }
 
     /// Appends the children `node` contributes in at most `slots` slots.
