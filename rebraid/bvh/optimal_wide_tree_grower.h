@@ -13,6 +13,7 @@
 
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/bbox.h"
+#include "rebraid/core/huge_pages.h"
 
 namespace rebraid {
 
@@ -45,6 +46,8 @@ public:
         BinaryNode& top = arena.emplace_back();
         build(root, 0, top, arenas, arena);
         out.clear();
+        // On huge pages, as the greedy builders' node arrays: rays touch nodes all over it.
+        reserve_on_huge_pages(out, node_count(top, slots_));
         emit(top, slots_, out);
         return NodeRef::inner(0);
     }
@@ -159,6 +162,19 @@ private:
         const int left = node.left_slots[shared - 1];
         gather(*node.left, left, kids, count);
         gather(*node.right, shared - left, kids, count);
+    }
+
+    /// The wide nodes emit() writes for `node`.
+    static std::size_t node_count(const BinaryNode& node, int slots) {
+        std::array<const BinaryNode*, kSlots> kids{};
+        int count = 0;
+        const int left = node.left_slots[slots - 1];
+        gather(*node.left, left, kids, count);
+        gather(*node.right, slots - left, kids, count);
+        std::size_t nodes = 1;
+        for (int i = 0; i < count; ++i)
+            if (!kids[i]->is_leaf()) nodes += node_count(*kids[i], slots);
+        return nodes;
     }
 
     /// Writes `node` as a wide node of at most `slots` children at the end of `out`, then its
