@@ -7,8 +7,6 @@
 
 namespace rebraid {
 
-/// Parameters of the binned-SAH wide-BVH builder (object BVHs, the flat BVH and the top
-/// levels). Defaults are the values the benchmarks in bench/RESULTS.md use.
 /// How a wide BVH's nodes are cut out of the binary tree of SAH splits.
 enum class NodeCollapse {
     /// Fill each node by splitting its child of largest area until it has max_children
@@ -19,6 +17,8 @@ enum class NodeCollapse {
     optimal,
 };
 
+/// Parameters of the binned-SAH wide-BVH builder (object BVHs, the flat BVH and the top
+/// levels). Defaults are the values the benchmarks in bench/RESULTS.md use.
 struct BuildSettings {
     /// SAH bins per axis; more bins find better splits at a higher build cost.
     std::uint32_t bin_count = 32;
