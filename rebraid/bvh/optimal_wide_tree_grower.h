@@ -164,13 +164,20 @@ private:
         gather(*node.right, shared - left, kids, count);
     }
 
-    /// The wide nodes emit() writes for `node`.
-    static std::size_t node_count(const BinaryNode& node, int slots) {
-        std::array<const BinaryNode*, kSlots> kids{};
+    /// The children of `node` as a wide node of at most `slots` children; returns their count.
+    static int wide_children(const BinaryNode& node, int slots,
+                             std::array<const BinaryNode*, kSlots>& kids) {
         int count = 0;
         const int left = node.left_slots[slots - 1];
         gather(*node.left, left, kids, count);
         gather(*node.right, slots - left, kids, count);
+        return count;
+    }
+
+    /// The wide nodes emit() writes for `node`.
+    static std::size_t node_count(const BinaryNode& node, int slots) {
+        std::array<const BinaryNode*, kSlots> kids{};
+        const int count = wide_children(node, slots, kids);
         std::size_t nodes = 1;
         for (int i = 0; i < count; ++i)
             if (!kids[i]->is_leaf()) nodes += node_count(*kids[i], slots);
@@ -181,10 +188,7 @@ private:
     /// inner children depth first; returns its id.
     static std::uint32_t emit(const BinaryNode& node, int slots, std::vector<WideNode>& out) {
         std::array<const BinaryNode*, kSlots> kids{};
-        int count = 0;
-        const int left = node.left_slots[slots - 1];
-        gather(*node.left, left, kids, count);
-        gather(*node.right, slots - left, kids, count);
+        const int count = wide_children(node, slots, kids);
         const auto id = std::uint32_t(out.size());
         out.push_back(WideNode::make_empty());
         for (int i = 0; i < count; ++i) {
