@@ -77,7 +77,7 @@ GltfTestFile one_triangle_file() {
 
 std::string scratch_glb(const GltfTestFile& file, const std::string& name) {
     const fs::path dir = scratch_dir();
-    // write_glb writes into REBRAID_TEST_TMP with a fixed prefix; move it to our folder.
+    // write_glb writes into the glTF writer's scratch folder; move it to our folder.
     const fs::path written = file.write_glb("bad_input_" + name);
     const fs::path path = dir / name;
     fs::rename(written, path);

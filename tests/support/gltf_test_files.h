@@ -4,7 +4,6 @@
 // buffer, and writes it as .glb (embedded BIN chunk) or .gltf + .bin into REBRAID_TEST_TMP.
 // Tests edit `json` directly to produce broken files.
 
-#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -12,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "rebraid/core/types.h"
+#include "support/cli_runner.h"
 
 namespace rebraid::test {
 
@@ -24,15 +23,11 @@ inline constexpr int kUnsignedShort = 5123;
 inline constexpr int kUnsignedInt = 5125;
 inline constexpr int kFloat = 5126;
 
-/// Path of `name` in the tests' scratch folder, prefixed with the running test's name: other
-/// test programs share the folder, and ctest runs tests as parallel processes, so two tests
-/// writing a file of the same name must not meet (one read a file the other was writing).
+/// Path of `name` in the running test's own scratch folder (test_scratch_dir): ctest runs
+/// tests as parallel processes, and two tests writing a file of the same name must not meet
+/// (one read a file the other was writing).
 inline std::string scratch_path(const std::string& name) {
-    const testing::TestInfo* test = testing::UnitTest::GetInstance()->current_test_info();
-    std::string owner =
-        test == nullptr ? "" : std::string(test->test_suite_name()) + "." + test->name() + "_";
-    std::replace(owner.begin(), owner.end(), '/', '_');  // parameterised tests' names
-    return std::string(REBRAID_TEST_TMP) + "/gltf_test_" + owner + name;
+    return (test_scratch_dir("gltf_test") / name).string();
 }
 
 /// Writes `bytes` to scratch_path(name) and returns that path.
