@@ -21,26 +21,36 @@ namespace rebraid::cli {
 
 namespace {
 
-template <class AccelType>
-std::unique_ptr<Accel> build_without_options(const Scene& scene, const AccelOptions& /*options*/) {
-    return std::make_unique<AccelType>(scene);
+/// The triangle test `options` asks for: watertight in robust mode, as Embree's robust mode.
+TriangleTest triangle_test_of(const AccelOptions& options) {
+    return options.is_robust ? TriangleTest::watertight : TriangleTest::moller;
+}
+
+std::unique_ptr<Accel> build_flat(const Scene& scene, const AccelOptions& options) {
+    auto accel = std::make_unique<FlatAccel>(scene);
+    accel->set_triangle_test(triangle_test_of(options));
+    return accel;
 }
 
 template <class EmbreeAccelType>
 std::unique_ptr<Accel> build_embree(const Scene& scene, const AccelOptions& options) {
     glue::EmbreeReferenceSettings settings;
-    settings.is_robust = options.is_embree_robust;
+    settings.is_robust = options.is_robust;
     return std::make_unique<EmbreeAccelType>(scene, settings);
 }
 
 std::unique_ptr<Accel> build_two_level(const Scene& scene, const AccelOptions& options) {
-    return std::make_unique<InstancedAccel>(
+    auto accel = std::make_unique<InstancedAccel>(
         build_two_level_accel(scene, make_object_builder(options.object_builder)));
+    accel->set_triangle_test(triangle_test_of(options));
+    return accel;
 }
 
 std::unique_ptr<Accel> build_rebraid(const Scene& scene, const AccelOptions& options) {
-    return std::make_unique<InstancedAccel>(
+    auto accel = std::make_unique<InstancedAccel>(
         build_rebraid_accel(scene, make_object_builder(options.object_builder), options.rebraid));
+    accel->set_triangle_test(triangle_test_of(options));
+    return accel;
 }
 
 // Adding a structure to the command line is one line here.
@@ -50,11 +60,11 @@ constexpr std::array kAccelTable{
     AccelEntry{"embree-instanced", "Embree, one scene per mesh plus one instance per instance",
                &build_embree<glue::EmbreeInstancedAccel>, false, false, true},
     AccelEntry{"flat", "one BVH over every instance's triangles in world space (no instancing)",
-               &build_without_options<FlatAccel>},
+               &build_flat, false, false, true},
     AccelEntry{"twolevel", "object BVHs plus a binned-SAH top level over the instances",
-               &build_two_level, true},
+               &build_two_level, true, false, true},
     AccelEntry{"rebraid", "object BVHs plus a re-braided top level (Benthin et al. 2017)",
-               &build_rebraid, true, true},
+               &build_rebraid, true, true, true},
 };
 
 constexpr std::array kObjectBuilderKinds{ObjectBuilderKind::own, ObjectBuilderKind::embree_high,
@@ -221,13 +231,10 @@ const std::vector<VariantKey>& variant_keys() {
         {"budget-search-min-use", real_number(&Settings::budget_search_min_use)},
         {"robust",
          {[](const VariantValue& value, AccelOptions& options) {
-              options.is_embree_robust =
-                  value.choice<bool>(std::vector<std::pair<std::string_view, bool>>{
-                      {"1", true}, {"0", false}, {"true", true}, {"false", false}});
+              options.is_robust = value.choice<bool>(std::vector<std::pair<std::string_view, bool>>{
+                  {"1", true}, {"0", false}, {"true", true}, {"false", false}});
           },
-          [](const AccelOptions& a, const AccelOptions& b) {
-              return a.is_embree_robust == b.is_embree_robust;
-          }}},
+          [](const AccelOptions& a, const AccelOptions& b) { return a.is_robust == b.is_robust; }}},
     };
     return keys;
 }
@@ -238,7 +245,7 @@ constexpr std::string_view kRobustKey = "robust";
 /// Which structures a variant key changes: AccelEntry's flag for it.
 bool AccelEntry::*structures_using(std::string_view key) {
     if (key == kObjectBuilderKey) return &AccelEntry::has_object_bvhs;
-    if (key == kRobustKey) return &AccelEntry::is_embree;
+    if (key == kRobustKey) return &AccelEntry::has_robust_mode;
     return &AccelEntry::has_rebraid_settings;
 }
 

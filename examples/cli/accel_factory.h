@@ -36,10 +36,12 @@ struct AccelOptions {
     std::vector<std::string> rebraid_options_given;
     /// Whether the command line gave --object-builder.
     bool is_object_builder_given = false;
-    /// RTC_SCENE_FLAG_ROBUST on the Embree structures (`embree-flat:robust=1`): Embree's
-    /// robust traversal and triangle test. Off by default, as in an Embree application that
-    /// sets no scene flags: the benchmarks compare with Embree as it runs by default.
-    bool is_embree_robust = false;
+    /// Robust mode (`flat:robust=1`, `embree-flat:robust=1`): RTC_SCENE_FLAG_ROBUST on the
+    /// Embree structures (Embree's robust traversal and triangle test), the watertight
+    /// triangle test (TriangleTest::watertight) on the project's. Off by default, as in an
+    /// Embree application that sets no scene flags: the benchmarks compare with Embree as it
+    /// runs by default, and the project's structures then run the Möller test as Embree does.
+    bool is_robust = false;
 };
 
 /// The `--opening` name of `rule` ("extent", "sah", "overlap").
@@ -72,8 +74,8 @@ struct AccelEntry {
     bool has_object_bvhs = false;
     /// True when AccelOptions::rebraid changes the structure.
     bool has_rebraid_settings = false;
-    /// True for Embree's own structures (AccelOptions::is_embree_robust changes them).
-    bool is_embree = false;
+    /// True when AccelOptions::is_robust changes the structure.
+    bool has_robust_mode = false;
 };
 
 /// Every structure `--accel` accepts, in the order `--help` lists them.

@@ -37,6 +37,9 @@ std::string_view stats_field_note(std::string_view key) {
     if (key == "budget") return "extra BRefs opening may add beyond one per instance";
     if (key == "opened") return "BRefs opened into their children";
     if (key == "kernels") return "instruction set of the traversal (REBRAID_SIMD chooses)";
+    if (key == "triangle_test")
+        return "ray-triangle test of the traversal: moller (Embree's default) or watertight "
+               "(robust=1)";
     return {};
 }
 

@@ -28,6 +28,7 @@ void for_each_stats_field(const AccelStats& stats, Visitor&& visit) {
     visit("budget", stats.budget);
     visit("opened", stats.opened);
     visit("kernels", stats.kernels);
+    visit("triangle_test", stats.triangle_test);
 }
 
 template <class T>

@@ -54,18 +54,21 @@ public:
                     rows[r], _mm256_loadu_ps(shifted + std::size_t(r) * segment.stride), lanes);
         }
     }
-    /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any.
+    /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any, by
+    /// the test `kTest`.
+    template <TriangleTest kTest>
     bool intersect(const TriangleGroupRay& ray, float tnear, float tfar,
                    TriangleGroupHit& hit) const {
         __m256 rows[9];
         load_rows(rows);
-        return intersect_triangle_rows(rows, count_, ray, tnear, tfar, hit);
+        return intersect_triangle_rows<kTest>(rows, count_, ray, tnear, tfar, hit);
     }
     /// Whether the ray hits any of the gathered triangles within [tnear, tfar].
+    template <TriangleTest kTest>
     bool occluded(const TriangleGroupRay& ray, float tnear, float tfar) const {
         __m256 rows[9];
         load_rows(rows);
-        return occluded_triangle_rows(rows, count_, ray, tnear, tfar);
+        return occluded_triangle_rows<kTest>(rows, count_, ray, tnear, tfar);
     }
     /// Leaf-order position of the triangle in `lane`.
     std::uint32_t position(std::uint32_t lane) const {

@@ -9,6 +9,7 @@
 #include "rebraid/bvh/traversal.h"
 #include "rebraid/bvh/triangle_group.h"
 #include "rebraid/core/simd_config.h"
+#include "rebraid/core/triangle_test.h"
 
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
@@ -59,14 +60,17 @@ public:
         }
     }
     std::uint32_t count() const { return count_; }
-    /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any.
+    /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any, by
+    /// the test `kTest`.
+    template <TriangleTest kTest>
     bool intersect(const TriangleGroupRay& ray, float tnear, float tfar,
                    TriangleGroupHit& hit) const {
-        return intersect_triangle_lanes(lanes_, count_, ray, tnear, tfar, hit);
+        return intersect_triangle_lanes<kTest>(lanes_, count_, ray, tnear, tfar, hit);
     }
     /// Whether the ray hits any of the gathered triangles within [tnear, tfar].
+    template <TriangleTest kTest>
     bool occluded(const TriangleGroupRay& ray, float tnear, float tfar) const {
-        return occluded_triangle_lanes(lanes_, count_, ray, tnear, tfar);
+        return occluded_triangle_lanes<kTest>(lanes_, count_, ray, tnear, tfar);
     }
     /// Leaf-order position of the triangle in `lane`.
     std::uint32_t position(std::uint32_t lane) const {
@@ -102,7 +106,7 @@ void add_leaves_and_test(Lanes& lanes, const NodeRef* refs, unsigned slots,
 namespace object_traversal_detail {
 
 /// intersect_object_bvh_leaf_order with `lanes` gathering the leaves' triangles.
-template <class Lanes, class HitDataPrefetch>
+template <TriangleTest kTest, class Lanes, class HitDataPrefetch>
 bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                           Hit& hit, TraversalCounters* counters,
                           HitDataPrefetch&& prefetch_hit_data) {
@@ -111,7 +115,7 @@ bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pr
     bool found = false;
     const auto test_lanes = [&] {
         TriangleGroupHit group_hit;
-        if (lanes.intersect(group_ray, ray.tnear, ray.tfar, group_hit)) {
+        if (lanes.template intersect<kTest>(group_ray, ray.tnear, ray.tfar, group_hit)) {
             ray.tfar = group_hit.t;
             hit.t = group_hit.t;
             hit.u = group_hit.u;
@@ -134,14 +138,14 @@ bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pr
 }
 
 /// occluded_object_bvh with `lanes` gathering the leaves' triangles.
-template <class Lanes>
+template <TriangleTest kTest, class Lanes>
 bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                          TraversalCounters* counters) {
     const TraversalRay& ray = prepared.ray;
     const TriangleGroupRay& group_ray = prepared.triangle_ray;
     bool is_occluded = false;
     const auto test_lanes = [&] {
-        is_occluded = is_occluded || lanes.occluded(group_ray, ray.tnear, ray.tfar);
+        is_occluded = is_occluded || lanes.template occluded<kTest>(group_ray, ray.tnear, ray.tfar);
         lanes.clear();
     };
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
@@ -166,7 +170,7 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
 /// (ids in leaf order), so that the lookup's cache miss overlaps the rest of the traversal,
 /// or copies the corners. (Asking for every visited leaf's ids instead cost more than the
 /// misses it hid.) `start_leaf` says what a leaf `start` may be (StartLeaf).
-template <class HitDataPrefetch = NoHitDataPrefetch>
+template <TriangleTest kTest, class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                      Hit& hit, TraversalCounters* counters,
                                      HitDataPrefetch&& prefetch_hit_data = {},
@@ -175,13 +179,13 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 #ifdef REBRAID_SIMD_AVX2
     if (rows_serve(bvh, start, start_leaf)) {
         LeafRowLanes lanes(bvh.leaf_rows);
-        return intersect_with_lanes(lanes, bvh.nodes, start, prepared, hit, counters,
-                                    prefetch_hit_data);
+        return intersect_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, hit, counters,
+                                           prefetch_hit_data);
     }
 #endif
     LeafTriangleLanes lanes(bvh.triangles);
-    return intersect_with_lanes(lanes, bvh.nodes, start, prepared, hit, counters,
-                                prefetch_hit_data);
+    return intersect_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, hit, counters,
+                                       prefetch_hit_data);
 }
 
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
@@ -191,7 +195,7 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 /// and located->corners to its corners, copied as each closer hit is found from the leaf data
 /// the test had just read (that caller reads them next: from ObjectBvh::triangles they would
 /// cost a cache miss), and then calls `on_closer_hit(*located)`. `start_leaf`: see StartLeaf.
-template <class OnCloserHit = void (*)(const HitTriangle&)>
+template <TriangleTest kTest, class OnCloserHit = void (*)(const HitTriangle&)>
 bool intersect_object_bvh(
     ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit, TraversalCounters* counters,
     HitTriangle* located = nullptr, OnCloserHit&& on_closer_hit = [](const HitTriangle&) {},
@@ -206,8 +210,8 @@ bool intersect_object_bvh(
             on_closer_hit(*located);
         }
     };
-    if (!intersect_object_bvh_leaf_order(bvh, start, ray, leaf_order_hit, counters,
-                                         prefetch_hit_data, start_leaf))
+    if (!intersect_object_bvh_leaf_order<kTest>(bvh, start, ray, leaf_order_hit, counters,
+                                                prefetch_hit_data, start_leaf))
         return false;
     hit = leaf_order_hit;
     hit.prim_id = prim_ids[leaf_order_hit.prim_id];
@@ -216,18 +220,19 @@ bool intersect_object_bvh(
 
 /// True when any triangle below `start` is hit within [ray.tnear, ray.tfar]; `start_leaf` as
 /// for intersect_object_bvh_leaf_order.
-inline bool occluded_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
-                                TraversalCounters* counters,
-                                [[maybe_unused]] StartLeaf start_leaf = StartLeaf::whole) {
+template <TriangleTest kTest>
+bool occluded_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
+                         TraversalCounters* counters,
+                         [[maybe_unused]] StartLeaf start_leaf = StartLeaf::whole) {
     using namespace object_traversal_detail;
 #ifdef REBRAID_SIMD_AVX2
     if (rows_serve(bvh, start, start_leaf)) {
         LeafRowLanes lanes(bvh.leaf_rows);
-        return occluded_with_lanes(lanes, bvh.nodes, start, prepared, counters);
+        return occluded_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, counters);
     }
 #endif
     LeafTriangleLanes lanes(bvh.triangles);
-    return occluded_with_lanes(lanes, bvh.nodes, start, prepared, counters);
+    return occluded_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, counters);
 }
 
 }  // namespace REBRAID_SIMD_NAMESPACE

@@ -6,6 +6,7 @@
 
 #include "rebraid/core/simd_config.h"
 #include "rebraid/core/triangle.h"
+#include "rebraid/core/triangle_test.h"
 
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
@@ -111,7 +112,11 @@ struct GroupCorners {
 /// Lanes (bits) of the group whose triangle the ray hits with tnear <= t <= tfar, with the
 /// edge weights and t per lane. Same arithmetic as intersect_triangle(), eight at a time
 /// (with fused multiply-adds, which keep the exact negation of shared edges' functions).
-struct GroupTest {
+template <TriangleTest kTest>
+struct GroupTest;
+
+template <>
+struct GroupTest<TriangleTest::watertight> {
     unsigned mask = 0;
     __m256 w1, w2, sum, t;
 
@@ -151,8 +156,44 @@ struct GroupTest {
     }
 };
 
+/// Lanes (bits) of the group whose triangle the ray hits with tnear <= t <= tfar: the same
+/// arithmetic as intersect_triangle_moller(), eight at a time, with w1, w2 the sign-corrected
+/// edge weights and `sum` |n.dir| (u = w1 / sum, v = w2 / sum).
+template <>
+struct GroupTest<TriangleTest::moller> {
+    unsigned mask = 0;
+    __m256 w1, w2, sum, t;
+
+    GroupTest(const GroupCorners& corners, std::uint32_t count, const TriangleGroupRay& ray,
+              float tnear, float tfar) {
+        const Vec3x8 e1 = corners.corner[0] - corners.corner[1];
+        const Vec3x8 e2 = corners.corner[2] - corners.corner[0];
+        const Vec3x8 normal = cross(e2, e1);
+        const Vec3x8 c = corners.corner[0] - Vec3x8{ray.org[0], ray.org[1], ray.org[2]};
+        const Vec3x8 r = cross(c, Vec3x8{ray.dir[0], ray.dir[1], ray.dir[2]});
+        const __m256 den = dot(normal, ray.dir);
+        const __m256 sign_bit = _mm256_set1_ps(-0.0f);
+        const __m256 den_sign = _mm256_and_ps(den, sign_bit);
+        sum = _mm256_andnot_ps(sign_bit, den);  // |den|
+        w1 = _mm256_xor_ps(dot(r, e2), den_sign);
+        w2 = _mm256_xor_ps(dot(r, e1), den_sign);
+        const __m256 zero = _mm256_setzero_ps();
+        const __m256 inside = _mm256_and_ps(
+            _mm256_and_ps(_mm256_cmp_ps(w1, zero, _CMP_GE_OQ), _mm256_cmp_ps(w2, zero, _CMP_GE_OQ)),
+            _mm256_and_ps(_mm256_cmp_ps(_mm256_add_ps(w1, w2), sum, _CMP_LE_OQ),
+                          _mm256_cmp_ps(sum, zero, _CMP_NEQ_OQ)));
+        mask = unsigned(_mm256_movemask_ps(inside)) & ((1u << count) - 1u);
+        if (mask == 0) return;  // the common case: the ray passes beside every triangle
+        t = _mm256_div_ps(_mm256_xor_ps(dot(normal, c), den_sign), sum);
+        const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(t, _mm256_set1_ps(tnear), _CMP_GE_OQ),
+                                              _mm256_cmp_ps(t, _mm256_set1_ps(tfar), _CMP_LE_OQ));
+        mask &= unsigned(_mm256_movemask_ps(in_range));
+    }
+};
+
 /// The closest lane of a test with at least one hit; on a tie the lower lane wins.
-inline TriangleGroupHit closest_lane(const GroupTest& test) {
+template <class Test>
+TriangleGroupHit closest_lane(const Test& test) {
     alignas(32) float t[kTriangleGroupSize], w1[kTriangleGroupSize], w2[kTriangleGroupSize],
         sum[kTriangleGroupSize];
     _mm256_store_ps(t, test.t);
@@ -174,12 +215,13 @@ inline TriangleGroupHit closest_lane(const GroupTest& test) {
 /// Closest hit among `count` (1..8) triangles from anywhere, `lanes[i]` pointing at the i-th
 /// (e.g. the triangles of several small leaves, tested together), with tnear <= t <= tfar;
 /// hit.index is the lane, and on a tie the lower lane wins. Returns false when none is hit.
-inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
-                                     const TriangleGroupRay& ray, float tnear, float tfar,
-                                     TriangleGroupHit& hit) {
+template <TriangleTest kTest>
+bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                              const TriangleGroupRay& ray, float tnear, float tfar,
+                              TriangleGroupHit& hit) {
     using namespace triangle_group_detail;
     const GroupCorners corners([lanes](std::uint32_t i) { return lanes[i]; }, count);
-    const GroupTest test(corners, count, ray, tnear, tfar);
+    const GroupTest<kTest> test(corners, count, ray, tnear, tfar);
     if (test.mask == 0) return false;
     hit = closest_lane(test);
     return true;
@@ -187,29 +229,32 @@ inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uin
 
 /// True when the ray hits any of the `count` (1..8) triangles `lanes` points at within
 /// [tnear, tfar].
-inline bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
-                                    const TriangleGroupRay& ray, float tnear, float tfar) {
+template <TriangleTest kTest>
+bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                             const TriangleGroupRay& ray, float tnear, float tfar) {
     using namespace triangle_group_detail;
     const GroupCorners corners([lanes](std::uint32_t i) { return lanes[i]; }, count);
-    return GroupTest(corners, count, ray, tnear, tfar).mask != 0;
+    return GroupTest<kTest>(corners, count, ray, tnear, tfar).mask != 0;
 }
 
 /// As intersect_triangle_lanes, for `count` triangles given as pre-arranged rows.
-inline bool intersect_triangle_rows(const __m256 (&rows)[9], std::uint32_t count,
-                                    const TriangleGroupRay& ray, float tnear, float tfar,
-                                    TriangleGroupHit& hit) {
+template <TriangleTest kTest>
+bool intersect_triangle_rows(const __m256 (&rows)[9], std::uint32_t count,
+                             const TriangleGroupRay& ray, float tnear, float tfar,
+                             TriangleGroupHit& hit) {
     using namespace triangle_group_detail;
-    const GroupTest test(GroupCorners(rows), count, ray, tnear, tfar);
+    const GroupTest<kTest> test(GroupCorners(rows), count, ray, tnear, tfar);
     if (test.mask == 0) return false;
     hit = closest_lane(test);
     return true;
 }
 
 /// As occluded_triangle_lanes, for `count` triangles given as pre-arranged rows.
-inline bool occluded_triangle_rows(const __m256 (&rows)[9], std::uint32_t count,
-                                   const TriangleGroupRay& ray, float tnear, float tfar) {
+template <TriangleTest kTest>
+bool occluded_triangle_rows(const __m256 (&rows)[9], std::uint32_t count,
+                            const TriangleGroupRay& ray, float tnear, float tfar) {
     using namespace triangle_group_detail;
-    return GroupTest(GroupCorners(rows), count, ray, tnear, tfar).mask != 0;
+    return GroupTest<kTest>(GroupCorners(rows), count, ray, tnear, tfar).mask != 0;
 }
 
 #else  // portable path: the scalar test, one triangle after the other
@@ -220,14 +265,15 @@ struct TriangleGroupRay {
     TriangleGroupRay(Vec3f origin, Vec3f direction) : org(origin), dir(direction) {}
 };
 
-inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
-                                     const TriangleGroupRay& ray, float tnear, float tfar,
-                                     TriangleGroupHit& hit) {
+template <TriangleTest kTest>
+bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                              const TriangleGroupRay& ray, float tnear, float tfar,
+                              TriangleGroupHit& hit) {
     bool found = false;
     for (std::uint32_t i = 0; i < count; ++i) {
         float t, u, v;
         // Strictly closer hits only, so ties go to the lower lane as in the SIMD path.
-        if (intersect_triangle(*lanes[i], ray.org, ray.dir, tnear, tfar, t, u, v) &&
+        if (intersect_triangle_by<kTest>(*lanes[i], ray.org, ray.dir, tnear, tfar, t, u, v) &&
             (!found || t < hit.t)) {
             hit = {i, t, u, v};
             found = true;
@@ -236,11 +282,13 @@ inline bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uin
     return found;
 }
 
-inline bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
-                                    const TriangleGroupRay& ray, float tnear, float tfar) {
+template <TriangleTest kTest>
+bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
+                             const TriangleGroupRay& ray, float tnear, float tfar) {
     for (std::uint32_t i = 0; i < count; ++i) {
         float t, u, v;
-        if (intersect_triangle(*lanes[i], ray.org, ray.dir, tnear, tfar, t, u, v)) return true;
+        if (intersect_triangle_by<kTest>(*lanes[i], ray.org, ray.dir, tnear, tfar, t, u, v))
+            return true;
     }
     return false;
 }

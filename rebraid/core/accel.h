@@ -35,6 +35,8 @@ struct AccelStats {
     std::optional<std::uint64_t> opened;  ///< rebraid: BRefs opened
     /// Instruction set of the traversal kernels rays take (simd_level.h), where one is chosen.
     std::optional<std::string> kernels;
+    /// Ray-triangle test of the traversal (triangle_test.h), where one is chosen.
+    std::optional<std::string> triangle_test;
 };
 
 /// A built acceleration structure over a Scene, answering rays in the project's terms

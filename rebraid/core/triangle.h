@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 
+#include "rebraid/core/triangle_test.h"
 #include "rebraid/core/types.h"
 
 namespace rebraid {
@@ -51,6 +52,43 @@ inline bool intersect_triangle(const TriangleVerts& tri, Vec3f org, Vec3f dir, f
     u = w1 * inv_sum;
     v = w2 * inv_sum;
     return true;
+}
+
+/// Ray-triangle test after Möller and Trumbore, in the form of Embree's default mode: with
+/// the edges e1 = v0 - v1 and e2 = v2 - v0, the normal n = e2 x e1 and c = v0 - org,
+/// u = (c x dir).e2 / (n.dir), v = (c x dir).e1 / (n.dir) and t = n.c / (n.dir), each
+/// compared after taking the sign of n.dir out, so that divisions wait for a hit. Not
+/// watertight (TriangleTest::moller); same results as intersect_triangle otherwise, up to
+/// rounding. Returns true and sets t, u, v when tnear <= t <= tfar.
+inline bool intersect_triangle_moller(const TriangleVerts& tri, Vec3f org, Vec3f dir, float tnear,
+                                      float tfar, float& t, float& u, float& v) {
+    const Vec3f e1 = tri.v0 - tri.v1, e2 = tri.v2 - tri.v0;
+    const Vec3f normal = cross(e2, e1);
+    const Vec3f c = tri.v0 - org;
+    const Vec3f r = cross(c, dir);
+    const float den = dot(normal, dir);
+    const float abs_den = std::fabs(den);
+    const float sign = den < 0.0f ? -1.0f : 1.0f;
+    const float scaled_u = sign * dot(r, e2), scaled_v = sign * dot(r, e1);
+    if (!(den != 0.0f && scaled_u >= 0.0f && scaled_v >= 0.0f && scaled_u + scaled_v <= abs_den))
+        return false;
+    const float hit_t = sign * dot(normal, c) / abs_den;
+    if (!(hit_t >= tnear && hit_t <= tfar)) return false;
+    const float inv_den = 1.0f / abs_den;
+    t = hit_t;
+    u = scaled_u * inv_den;
+    v = scaled_v * inv_den;
+    return true;
+}
+
+/// The test `test` names.
+template <TriangleTest test>
+bool intersect_triangle_by(const TriangleVerts& tri, Vec3f org, Vec3f dir, float tnear, float tfar,
+                           float& t, float& u, float& v) {
+    if constexpr (test == TriangleTest::moller)
+        return intersect_triangle_moller(tri, org, dir, tnear, tfar, t, u, v);
+    else
+        return intersect_triangle(tri, org, dir, tnear, tfar, t, u, v);
 }
 
 }  // namespace rebraid

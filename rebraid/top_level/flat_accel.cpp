@@ -70,7 +70,7 @@ void renumber_in_leaf_order(ObjectBvh& bvh, std::vector<InstanceId>& triangle_in
 }  // namespace
 
 FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings)
-    : simd_level_(default_simd_level()), kernels_(&trace_kernels(simd_level_)) {
+    : simd_level_(default_simd_level()), kernels_(&trace_kernels(simd_level_, triangle_test_)) {
     scene.validate();
     const BuildTimer timer;
     const Mesh world = make_world_mesh(scene, triangle_instance_, triangle_prim_);
@@ -91,8 +91,13 @@ bool FlatAccel::occluded(const Ray& ray) const {
 }
 
 void FlatAccel::set_simd_level(SimdLevel level) {
-    kernels_ = &trace_kernels(level);
+    kernels_ = &trace_kernels(level, triangle_test_);
     simd_level_ = level;
+}
+
+void FlatAccel::set_triangle_test(TriangleTest test) {
+    kernels_ = &trace_kernels(simd_level_, test);
+    triangle_test_ = test;
 }
 
 AccelStats FlatAccel::stats() const {
@@ -111,6 +116,7 @@ AccelStats FlatAccel::stats() const {
     hash.add<PrimId>(triangle_prim_);
     stats.structure_hash = hash.value();
     stats.kernels = std::string(simd_level_name(simd_level_));
+    stats.triangle_test = std::string(triangle_test_name(triangle_test_));
     return stats;
 }
 

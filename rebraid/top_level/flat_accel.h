@@ -7,6 +7,7 @@
 #include "rebraid/core/accel.h"
 #include "rebraid/core/scene.h"
 #include "rebraid/core/simd_level.h"
+#include "rebraid/core/triangle_test.h"
 
 namespace rebraid {
 
@@ -32,6 +33,12 @@ public:
     /// Traces with `level`'s kernels from now on (same hits at every level; to compare them).
     /// Throws rebraid::Error when this build or CPU cannot run it. Not while tracing.
     void set_simd_level(SimdLevel level);
+    /// The triangle test rays are traced with: TriangleTest::moller (Embree's default) at
+    /// construction.
+    TriangleTest triangle_test() const { return triangle_test_; }
+    /// Traces with `test` from now on (TriangleTest::watertight for Embree's robust mode). Not
+    /// while tracing.
+    void set_triangle_test(TriangleTest test);
 
 private:
     ObjectBvh bvh_;
@@ -39,6 +46,7 @@ private:
     std::vector<PrimId> triangle_prim_;
     AccelStats build_info_;
     SimdLevel simd_level_;
+    TriangleTest triangle_test_ = TriangleTest::moller;
     const TraceKernels* kernels_;
 };
 

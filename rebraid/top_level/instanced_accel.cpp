@@ -76,7 +76,7 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
       top_(std::move(top)),
       build_info_(build_info),
       simd_level_(default_simd_level()) {
-    use_kernels(simd_level_);
+    use_kernels(simd_level_, triangle_test_);
     // The instance records count as top-level build time: a frame that moves instances makes
     // them again (a million instances: hundreds of milliseconds).
     const BuildTimer timer;
@@ -127,8 +127,8 @@ bool InstancedAccel::occluded(const Ray& ray) const {
     return occluded_(*this, ray);
 }
 
-void InstancedAccel::use_kernels(SimdLevel level) {
-    const TraceKernels& kernels = trace_kernels(level);
+void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
+    const TraceKernels& kernels = trace_kernels(level, test);
     // A top level of one item: no top-level traversal to run (TraceKernels::sole_item_*).
     const bool is_sole_item = top_.root.is_leaf() && top_.root.prim_count() == 1;
     intersect_ = is_sole_item ? kernels.sole_item_intersect : kernels.instanced_intersect;
@@ -138,8 +138,13 @@ void InstancedAccel::use_kernels(SimdLevel level) {
 }
 
 void InstancedAccel::set_simd_level(SimdLevel level) {
-    use_kernels(level);
+    use_kernels(level, triangle_test_);
     simd_level_ = level;
+}
+
+void InstancedAccel::set_triangle_test(TriangleTest test) {
+    use_kernels(simd_level_, test);
+    triangle_test_ = test;
 }
 
 AccelStats InstancedAccel::stats() const {
@@ -168,6 +173,7 @@ AccelStats InstancedAccel::stats() const {
     stats.memory_bytes = memory;
     stats.structure_hash = hash.value();
     stats.kernels = std::string(simd_level_name(simd_level_));
+    stats.triangle_test = std::string(triangle_test_name(triangle_test_));
     return stats;
 }
 

@@ -10,6 +10,7 @@
 #include "rebraid/core/scene.h"
 #include "rebraid/core/simd_level.h"
 #include "rebraid/core/transform.h"
+#include "rebraid/core/triangle_test.h"
 #include "rebraid/top_level/instance_target.h"
 #include "rebraid/top_level/located_hit.h"
 #include "rebraid/top_level/top_level_bvh.h"
@@ -67,6 +68,12 @@ public:
     /// Traces with `level`'s kernels from now on (same hits at every level; to compare them).
     /// Throws rebraid::Error when this build or CPU cannot run it. Not while tracing.
     void set_simd_level(SimdLevel level);
+    /// The triangle test rays are traced with: TriangleTest::moller (Embree's default) at
+    /// construction.
+    TriangleTest triangle_test() const { return triangle_test_; }
+    /// Traces with `test` from now on (TriangleTest::watertight for Embree's robust mode). Not
+    /// while tracing.
+    void set_triangle_test(TriangleTest test);
 
 private:
     std::vector<ObjectBvh> object_bvhs_;
@@ -77,6 +84,7 @@ private:
     std::vector<ObjectBvhView> object_views_;
     AccelStats build_info_;
     SimdLevel simd_level_;
+    TriangleTest triangle_test_ = TriangleTest::moller;
     // The entry points of the kernel level the queries take: a top level of one item has
     // queries of its own (TraceKernels::sole_item_intersect), chosen here once rather than
     // tested in every query.
@@ -84,7 +92,7 @@ private:
     decltype(TraceKernels::instanced_occluded) occluded_ = nullptr;
     decltype(TraceKernels::instanced_intersect_located) intersect_located_ = nullptr;
 
-    void use_kernels(SimdLevel level);
+    void use_kernels(SimdLevel level, TriangleTest test);
 };
 
 /// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).

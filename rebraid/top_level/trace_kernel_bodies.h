@@ -15,13 +15,14 @@
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
-// The four entry points are flattened (every call inside them inlined): in one unit with all
+// The entry points are flattened (every call inside them inlined): in one unit with all
 // four, the compiler's unit-growth limits otherwise leave the traversal loops out of line and
 // its register allocation worse, 8-15 % more instructions per ray than each query compiled
 // alone (callgrind, diffuse rays of fzk_haus and cg57_cruiser).
 
-[[gnu::flatten]] inline Hit flat_intersect(const FlatAccel& accel, const Ray& ray,
-                                           TraversalCounters* counters) {
+template <TriangleTest kTest>
+[[gnu::flatten]] Hit flat_intersect(const FlatAccel& accel, const Ray& ray,
+                                    TraversalCounters* counters) {
     Hit hit;
     PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
@@ -34,8 +35,8 @@ inline namespace REBRAID_SIMD_NAMESPACE {
         __builtin_prefetch(prims + position);
     };
     const ObjectBvh& bvh = accel.bvh();
-    if (intersect_object_bvh_leaf_order(bvh, bvh.root, traversal_ray, hit, counters,
-                                        prefetch_ids)) {
+    if (intersect_object_bvh_leaf_order<kTest>(bvh, bvh.root, traversal_ray, hit, counters,
+                                               prefetch_ids)) {
         const PrimId world_prim = hit.prim_id;
         hit.instance_id = instances[world_prim];
         hit.prim_id = prims[world_prim];
@@ -43,9 +44,10 @@ inline namespace REBRAID_SIMD_NAMESPACE {
     return hit;
 }
 
-[[gnu::flatten]] inline bool flat_occluded(const FlatAccel& accel, const Ray& ray) {
+template <TriangleTest kTest>
+[[gnu::flatten]] bool flat_occluded(const FlatAccel& accel, const Ray& ray) {
     PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    return occluded_object_bvh(accel.bvh(), accel.bvh().root, traversal_ray, nullptr);
+    return occluded_object_bvh<kTest>(accel.bvh(), accel.bvh().root, traversal_ray, nullptr);
 }
 
 /// `org` and `dir` mapped by `to_object` into an instance's object space. Every query maps
@@ -150,23 +152,24 @@ struct SoleItemStart {
 
 /// The closest hit of a top level of one item (SoleItemStart); `located` and `observer` as for
 /// instanced_closest_hit.
-inline Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray,
-                                 TraversalCounters* counters, HitTriangle* located,
-                                 const CloserHitObserver* observer) {
+template <TriangleTest kTest>
+Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
+                          HitTriangle* located, const CloserHitObserver* observer) {
     SoleItemStart start(accel, ray);
     if (counters) ++counters->object_entries;
     Hit hit;
-    if (intersect_object_bvh(start.bvh, start.item.object_node, *start.ray, hit, counters, located,
-                             closer_hit_notifier(observer, start.item.instance_id),
-                             start.start_leaf))
+    if (intersect_object_bvh<kTest>(start.bvh, start.item.object_node, *start.ray, hit, counters,
+                                    located, closer_hit_notifier(observer, start.item.instance_id),
+                                    start.start_leaf))
         hit.instance_id = start.item.instance_id;
     return hit;
 }
 
-[[gnu::flatten]] inline bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
+template <TriangleTest kTest>
+[[gnu::flatten]] bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
     SoleItemStart start(accel, ray);
-    return occluded_object_bvh(start.bvh, start.item.object_node, *start.ray, nullptr,
-                               start.start_leaf);
+    return occluded_object_bvh<kTest>(start.bvh, start.item.object_node, *start.ray, nullptr,
+                                      start.start_leaf);
 }
 
 /// Prefetches what entering the first item of top-level leaf `leaf` reads first: its object
@@ -194,9 +197,9 @@ inline void prefetch_item_target(const TopLevelBvh& top, const InstanceTarget* t
 /// The closest hit of an instanced structure; with `located` given, also where the hit
 /// triangle is kept and its corners (intersect_object_bvh), and `observer` (when not null)
 /// told of each closer hit.
-inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
-                                 TraversalCounters* counters, HitTriangle* located,
-                                 const CloserHitObserver* observer) {
+template <TriangleTest kTest>
+Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
+                          HitTriangle* located, const CloserHitObserver* observer) {
     Hit hit;
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray);
@@ -211,9 +214,9 @@ inline Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray,
             const InstanceTarget& target = targets[item.instance_id];
             if (counters) ++counters->object_entries;
             PreparedRay& object_ray = object_rays.ray_for(target);
-            if (intersect_object_bvh(views[target.mesh], item.object_node, object_ray, hit,
-                                     counters, located,
-                                     closer_hit_notifier(observer, item.instance_id), start_leaf)) {
+            if (intersect_object_bvh<kTest>(
+                    views[target.mesh], item.object_node, object_ray, hit, counters, located,
+                    closer_hit_notifier(observer, item.instance_id), start_leaf)) {
                 world_ray.ray.tfar = object_ray.ray.tfar;
                 hit.instance_id = item.instance_id;
             }
@@ -247,7 +250,8 @@ template <auto closest_hit>
     return located;
 }
 
-[[gnu::flatten]] inline bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
+template <TriangleTest kTest>
+[[gnu::flatten]] bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
     PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
     ObjectRayCache object_rays(world_ray);
     const TopLevelBvh& top = accel.top_level();
@@ -262,23 +266,31 @@ template <auto closest_hit>
                 const TopLevelItem& item = top.items[i];
                 const InstanceTarget& target = targets[item.instance_id];
                 PreparedRay& object_ray = object_rays.ray_for(target);
-                if (occluded_object_bvh(views[target.mesh], item.object_node, object_ray, nullptr,
-                                        start_leaf))
+                if (occluded_object_bvh<kTest>(views[target.mesh], item.object_node, object_ray,
+                                               nullptr, start_leaf))
                     return true;
             }
             return false;
         });
 }
 
-/// This level's entry points.
-inline constexpr TraceKernels kLevelTraceKernels{&flat_intersect,
-                                                 &flat_occluded,
-                                                 &intersect_entry<&instanced_closest_hit>,
-                                                 &instanced_occluded,
-                                                 &intersect_located_entry<&instanced_closest_hit>,
-                                                 &intersect_entry<&sole_item_closest_hit>,
-                                                 &sole_item_occluded,
-                                                 &intersect_located_entry<&sole_item_closest_hit>};
+/// This level's entry points with the triangle test `kTest`.
+template <TriangleTest kTest>
+inline constexpr TraceKernels kLevelTraceKernels{
+    &flat_intersect<kTest>,
+    &flat_occluded<kTest>,
+    &intersect_entry<&instanced_closest_hit<kTest>>,
+    &instanced_occluded<kTest>,
+    &intersect_located_entry<&instanced_closest_hit<kTest>>,
+    &intersect_entry<&sole_item_closest_hit<kTest>>,
+    &sole_item_occluded<kTest>,
+    &intersect_located_entry<&sole_item_closest_hit<kTest>>};
+
+/// This level's entry points with the triangle test `test`.
+inline const TraceKernels& level_trace_kernels(TriangleTest test) {
+    return test == TriangleTest::moller ? kLevelTraceKernels<TriangleTest::moller>
+                                        : kLevelTraceKernels<TriangleTest::watertight>;
+}
 
 }  // namespace REBRAID_SIMD_NAMESPACE
 }  // namespace rebraid

@@ -3,6 +3,7 @@
 #include "rebraid/core/accel.h"
 #include "rebraid/core/ray.h"
 #include "rebraid/core/simd_level.h"
+#include "rebraid/core/triangle_test.h"
 #include "rebraid/top_level/located_hit.h"
 
 namespace rebraid {
@@ -10,7 +11,8 @@ namespace rebraid {
 class FlatAccel;
 class InstancedAccel;
 
-/// The ray queries of the project's structures at one kernel level (simd_level.h). A
+/// The ray queries of the project's structures at one kernel level (simd_level.h) with one
+/// triangle test (triangle_test.h). A
 /// structure holds a pointer to one table and calls through it: one indirect call per ray
 /// selects the instruction set.
 struct TraceKernels {
@@ -30,7 +32,8 @@ struct TraceKernels {
                                               const CloserHitObserver* observer);
 };
 
-/// The kernels of `level`. Throws rebraid::Error when this build or this CPU cannot run it.
-const TraceKernels& trace_kernels(SimdLevel level);
+/// The kernels of `level` with the triangle test `test`. Throws rebraid::Error when this build
+/// or this CPU cannot run `level`.
+const TraceKernels& trace_kernels(SimdLevel level, TriangleTest test);
 
 }  // namespace rebraid

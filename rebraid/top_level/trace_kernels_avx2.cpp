@@ -7,8 +7,8 @@
 
 namespace rebraid {
 
-const TraceKernels& avx2_trace_kernels() {
-    return simd_avx2::kLevelTraceKernels;
+const TraceKernels& avx2_trace_kernels(TriangleTest test) {
+    return simd_avx2::level_trace_kernels(test);
 }
 
 }  // namespace rebraid

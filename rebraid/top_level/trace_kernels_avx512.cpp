@@ -15,8 +15,8 @@
 
 namespace rebraid {
 
-const TraceKernels& avx512_trace_kernels() {
-    return simd_avx512::kLevelTraceKernels;
+const TraceKernels& avx512_trace_kernels(TriangleTest test) {
+    return simd_avx512::level_trace_kernels(test);
 }
 
 }  // namespace rebraid

@@ -6,8 +6,8 @@
 
 namespace rebraid {
 
-const TraceKernels& portable_trace_kernels() {
-    return simd_portable::kLevelTraceKernels;
+const TraceKernels& portable_trace_kernels(TriangleTest test) {
+    return simd_portable::level_trace_kernels(test);
 }
 
 }  // namespace rebraid

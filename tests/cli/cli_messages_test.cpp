@@ -296,10 +296,14 @@ TEST(CliMessages, BuildOptionsOfOtherStructuresAreRefused) {
     EXPECT_EQ(mixed.exit_code, 0) << mixed.err;
 }
 
-TEST(CliMessages, RobustIsASettingOfEmbreesStructuresOnly) {
-    expect_error(run_rebraid({"stats", "--accel", "flat:robust=1"}),
-                 "accel 'flat:robust=1': flat does not use robust; it is a setting of embree-flat "
-                 "or embree-instanced");
+TEST(CliMessages, RobustModeIsASettingOfEveryStructure) {
+    // The project's structures in robust mode run the watertight triangle test, and say so.
+    const CommandResult robust_flat = run_rebraid({"stats", "--accel", "flat:robust=1", "--json"});
+    ASSERT_EQ(robust_flat.exit_code, 0) << robust_flat.err;
+    EXPECT_EQ(nlohmann::json::parse(robust_flat.out).at("triangle_test"), "watertight");
+    const CommandResult plain = run_rebraid({"stats", "--accel", "rebraid", "--json"});
+    ASSERT_EQ(plain.exit_code, 0) << plain.err;
+    EXPECT_EQ(nlohmann::json::parse(plain.out).at("triangle_test"), "moller");
     expect_error(run_rebraid({"stats", "--accel", "embree-flat:robust=2"}),
                  "accel 'embree-flat:robust=2': robust=2: valid values: 1, 0, true, false");
     // Embree's default flags are robust=0: naming them again is the same structure.

@@ -1,7 +1,9 @@
-// The scalar ray-triangle test (rebraid/core/triangle.h): barycentric convention, segment limits,
-// degenerate triangles, watertight shared edges, far-away origins.
+// The scalar ray-triangle tests (rebraid/core/triangle.h): barycentric convention, segment
+// limits and degenerate triangles for both; watertight shared edges and far-away origins for
+// the watertight one; the Möller test against it away from edges.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <vector>
@@ -20,40 +22,59 @@ struct TriangleHit {
 };
 
 TriangleHit trace(const TriangleVerts& tri, Vec3f org, Vec3f dir, float tnear = 0.0f,
-                  float tfar = kInf) {
+                  float tfar = kInf, TriangleTest test = TriangleTest::watertight) {
     TriangleHit hit;
-    hit.is_hit = intersect_triangle(tri, org, dir, tnear, tfar, hit.t, hit.u, hit.v);
+    hit.is_hit = test == TriangleTest::watertight
+                     ? intersect_triangle(tri, org, dir, tnear, tfar, hit.t, hit.u, hit.v)
+                     : intersect_triangle_moller(tri, org, dir, tnear, tfar, hit.t, hit.u, hit.v);
     return hit;
 }
 
+constexpr TriangleTest kBothTests[] = {TriangleTest::watertight, TriangleTest::moller};
+
 TEST(Triangle, HitReportsDistanceAndWeightsOfCorners1And2) {
-    const TriangleVerts tri{{0, 0, 0}, {4, 0, 0}, {0, 2, 0}};
-    // The point 0.25 * v1 + 0.5 * v2 = (1, 1, 0), approached from z = 3 along -z.
-    const TriangleHit hit = trace(tri, {1, 1, 3}, {0, 0, -1});
-    ASSERT_TRUE(hit.is_hit);
-    EXPECT_NEAR(hit.t, 3.0f, 1e-6f);
-    EXPECT_NEAR(hit.u, 0.25f, 1e-6f);
-    EXPECT_NEAR(hit.v, 0.5f, 1e-6f);
+    for (TriangleTest test : kBothTests) {
+        SCOPED_TRACE(triangle_test_name(test));
+        const TriangleVerts tri{{0, 0, 0}, {4, 0, 0}, {0, 2, 0}};
+        // The point 0.25 * v1 + 0.5 * v2 = (1, 1, 0), approached from z = 3 along -z, and
+        // from below (the other winding as the ray sees it).
+        for (const float side : {1.0f, -1.0f}) {
+            const TriangleHit hit = trace(tri, {1, 1, 3 * side}, {0, 0, -side}, 0.0f, kInf, test);
+            ASSERT_TRUE(hit.is_hit);
+            EXPECT_NEAR(hit.t, 3.0f, 1e-6f);
+            EXPECT_NEAR(hit.u, 0.25f, 1e-6f);
+            EXPECT_NEAR(hit.v, 0.5f, 1e-6f);
+        }
+    }
 }
 
 TEST(Triangle, BothSidesAreHitAndTIsInUnitsOfTheDirection) {
-    const TriangleVerts tri{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-    const TriangleHit front = trace(tri, {0.2f, 0.2f, 2}, {0, 0, -4});
-    const TriangleHit back = trace(tri, {0.2f, 0.2f, -2}, {0, 0, 4});
-    ASSERT_TRUE(front.is_hit);
-    ASSERT_TRUE(back.is_hit);
-    EXPECT_NEAR(front.t, 0.5f, 1e-6f);  // direction of length 4: distance 2 is t = 0.5
-    EXPECT_NEAR(back.t, 0.5f, 1e-6f);
+    for (TriangleTest test : kBothTests) {
+        SCOPED_TRACE(triangle_test_name(test));
+        const TriangleVerts tri{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+        const TriangleHit front = trace(tri, {0.2f, 0.2f, 2}, {0, 0, -4}, 0.0f, kInf, test);
+        const TriangleHit back = trace(tri, {0.2f, 0.2f, -2}, {0, 0, 4}, 0.0f, kInf, test);
+        ASSERT_TRUE(front.is_hit);
+        ASSERT_TRUE(back.is_hit);
+        EXPECT_NEAR(front.t, 0.5f, 1e-6f);  // direction of length 4: distance 2 is t = 0.5
+        EXPECT_NEAR(back.t, 0.5f, 1e-6f);
+    }
 }
 
 TEST(Triangle, RespectsTheSegmentAndMissesBesideTheTriangle) {
-    const TriangleVerts tri{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-    EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, -1}, 0.0f, 1.9f).is_hit);
-    EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, -1}, 2.1f, kInf).is_hit);
-    EXPECT_TRUE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, -1}, 1.9f, 2.1f).is_hit);
-    EXPECT_FALSE(trace(tri, {0.6f, 0.6f, 2}, {0, 0, -1}).is_hit);  // beyond the hypotenuse
-    EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, 1}).is_hit);   // pointing away
-    EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 0}, {1, 0, 0}).is_hit);   // inside the plane
+    for (TriangleTest test : kBothTests) {
+        SCOPED_TRACE(triangle_test_name(test));
+        const TriangleVerts tri{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+        EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, -1}, 0.0f, 1.9f, test).is_hit);
+        EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, -1}, 2.1f, kInf, test).is_hit);
+        EXPECT_TRUE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, -1}, 1.9f, 2.1f, test).is_hit);
+        // The segment's ends are inside it: a hit at exactly tnear or tfar counts.
+        EXPECT_TRUE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, -1}, 2.0f, 2.0f, test).is_hit);
+        // Beyond the hypotenuse, pointing away, inside the plane.
+        EXPECT_FALSE(trace(tri, {0.6f, 0.6f, 2}, {0, 0, -1}, 0.0f, kInf, test).is_hit);
+        EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 2}, {0, 0, 1}, 0.0f, kInf, test).is_hit);
+        EXPECT_FALSE(trace(tri, {0.2f, 0.2f, 0}, {1, 0, 0}, 0.0f, kInf, test).is_hit);
+    }
 }
 
 TEST(Triangle, DegenerateTrianglesNeverHit) {
@@ -67,7 +88,9 @@ TEST(Triangle, DegenerateTrianglesNeverHit) {
             const Vec3f target = a + (c - a) * s;
             const Vec3f org{random.next_float(-2, 2), random.next_float(-2, 2),
                             random.next_float(-2, 2)};
-            EXPECT_FALSE(trace(tri, org, target - org).is_hit);
+            for (TriangleTest test : kBothTests)
+                EXPECT_FALSE(trace(tri, org, target - org, 0.0f, kInf, test).is_hit)
+                    << triangle_test_name(test);
         }
     }
 }
@@ -188,6 +211,36 @@ TEST(Triangle, FarAwayOriginsKeepAccurateDistances) {
         const double distance = std::sqrt(dx * dx + dy * dy + dz * dz);
         EXPECT_NEAR(hit.t, distance, 1e-4 * distance);
     }
+}
+
+TEST(Triangle, MollerTestAgreesWithTheWatertightOneAwayFromEdges) {
+    // Random triangles and rays: both tests hit the same triangles, at the same t, u and v up
+    // to rounding, wherever the ray passes clear of the edges (all weights above 1e-3).
+    Random random(17);
+    int compared = 0, hits = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const auto point = [&] {
+            return Vec3f{random.next_float(-1, 1), random.next_float(-1, 1),
+                         random.next_float(-1, 1)};
+        };
+        const TriangleVerts tri{point(), point(), point()};
+        const Vec3f org = point() * 3.0f, target = point();
+        const TriangleHit watertight = trace(tri, org, target - org);
+        const TriangleHit moller =
+            trace(tri, org, target - org, 0.0f, kInf, TriangleTest::moller);
+        if (watertight.is_hit &&
+            std::min({watertight.u, watertight.v, 1.0f - watertight.u - watertight.v}) < 1e-3f)
+            continue;
+        ++compared;
+        ASSERT_EQ(moller.is_hit, watertight.is_hit) << "ray " << i;
+        if (!moller.is_hit) continue;
+        ++hits;
+        EXPECT_NEAR(moller.t, watertight.t, 1e-4f * watertight.t) << "ray " << i;
+        EXPECT_NEAR(moller.u, watertight.u, 1e-4f) << "ray " << i;
+        EXPECT_NEAR(moller.v, watertight.v, 1e-4f) << "ray " << i;
+    }
+    EXPECT_GT(compared, 19000);
+    EXPECT_GT(hits, 1000);  // the comparison covers hits, not only misses
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // The project's structures against Embree's flat scene on the same rays: closest-hit
 // distance, instance and primitive ids, and occlusion, on shared, default and generated
-// scenes, with the kernels of every level this build and CPU can run (simd_level.h).
+// scenes, with the kernels of every level this build and CPU can run (simd_level.h) and both
+// triangle tests (triangle_test.h): the Möller test against Embree's default mode, the
+// watertight one against its robust mode.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -13,6 +15,7 @@
 
 #include "embree_glue/reference/embree_reference.h"
 #include "rebraid/core/simd_level.h"
+#include "rebraid/core/triangle_test.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/generators/random_rays.h"
 #include "rebraid/generators/world_space_objects.h"
@@ -45,12 +48,16 @@ std::vector<NamedAccel> project_accels() {
     };
 }
 
-/// Switches a project structure to `level`'s kernels.
-void use_simd_level(Accel& accel, SimdLevel level) {
-    if (auto* flat = dynamic_cast<FlatAccel*>(&accel))
+/// Switches a project structure to `level`'s kernels with the triangle test `test`.
+void use_kernels(Accel& accel, SimdLevel level, TriangleTest test) {
+    if (auto* flat = dynamic_cast<FlatAccel*>(&accel)) {
         flat->set_simd_level(level);
-    else
-        dynamic_cast<InstancedAccel&>(accel).set_simd_level(level);
+        flat->set_triangle_test(test);
+    } else {
+        auto& instanced = dynamic_cast<InstancedAccel&>(accel);
+        instanced.set_simd_level(level);
+        instanced.set_triangle_test(test);
+    }
 }
 
 /// Same hits, bit for bit, and same occlusion answers.
@@ -75,24 +82,31 @@ void expect_identical_answers(const test::AccelAnswers& a, const test::AccelAnsw
 }
 
 void expect_matches_embree_flat(const Scene& scene, const std::string& scene_name) {
-    const glue::EmbreeFlatAccel reference(scene);
-    const std::vector<Ray> rays = test::varied_rays(reference, scene.bounds(), 10000, 42);
-    const test::AccelAnswers expected = test::trace_all(reference, rays);
+    const glue::EmbreeFlatAccel robust_reference(scene);
+    const glue::EmbreeFlatAccel default_reference(scene, {.is_robust = false, .device_config = {}});
+    const std::vector<Ray> rays = test::varied_rays(robust_reference, scene.bounds(), 10000, 42);
+    const test::AccelAnswers robust_expected = test::trace_all(robust_reference, rays);
+    const test::AccelAnswers default_expected = test::trace_all(default_reference, rays);
     for (const NamedAccel& named : project_accels()) {
         const std::unique_ptr<Accel> accel = named.make(scene);
-        std::optional<test::AccelAnswers> avx2_answers;
-        for (SimdLevel level : runnable_simd_levels()) {
-            SCOPED_TRACE(scene_name + " / " + named.name + " / " +
-                         std::string(simd_level_name(level)));
-            use_simd_level(*accel, level);
-            test::AccelAnswers answers = test::trace_all(*accel, rays);
-            test::expect_same_answers(scene, rays, expected, answers,
-                                      test::tolerance_for(scene.bounds()));
-            // The AVX-512 kernels are the AVX2 sources compiled for AVX-512: same arithmetic,
-            // so the same bits.
-            if (level == SimdLevel::avx2) avx2_answers = std::move(answers);
-            if (level == SimdLevel::avx512 && avx2_answers)
-                expect_identical_answers(*avx2_answers, answers);
+        for (TriangleTest triangle_test : {TriangleTest::moller, TriangleTest::watertight}) {
+            const test::AccelAnswers& expected =
+                triangle_test == TriangleTest::watertight ? robust_expected : default_expected;
+            std::optional<test::AccelAnswers> avx2_answers;
+            for (SimdLevel level : runnable_simd_levels()) {
+                SCOPED_TRACE(scene_name + " / " + named.name + " / " +
+                             std::string(simd_level_name(level)) + " / " +
+                             std::string(triangle_test_name(triangle_test)));
+                use_kernels(*accel, level, triangle_test);
+                test::AccelAnswers answers = test::trace_all(*accel, rays);
+                test::expect_same_answers(scene, rays, expected, answers,
+                                          test::tolerance_for(scene.bounds()));
+                // The AVX-512 kernels are the AVX2 sources compiled for AVX-512: same
+                // arithmetic, so the same bits.
+                if (level == SimdLevel::avx2) avx2_answers = std::move(answers);
+                if (level == SimdLevel::avx512 && avx2_answers)
+                    expect_identical_answers(*avx2_answers, answers);
+            }
         }
     }
 }
