@@ -80,6 +80,11 @@ std::unique_ptr<InstancedAccel> build_top(const Scene& scene, std::vector<Object
                                             info);
 }
 
+/// The triangle test of Embree's mode for `converted`: watertight in robust mode.
+TriangleTest triangle_test_for(const glue::ConvertedEmbreeScene& converted) {
+    return converted.is_robust ? TriangleTest::watertight : TriangleTest::moller;
+}
+
 /// Embree's world-to-object map of each instance (index = InstanceId).
 std::vector<AffineTransform> embree_world_to_object_maps(const Scene& scene) {
     std::vector<AffineTransform> maps;
@@ -113,6 +118,7 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
     object_builder_ = make_object_builder(settings_);
     accel_ = std::make_unique<InstancedAccel>(
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
+    accel_->set_triangle_test(triangle_test_for(converted_));
     bounds_ = converted_.scene.bounds();
     pad_bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
@@ -314,6 +320,7 @@ EmbreeUpdateReport EmbreeAccel::update() {
         report.meshes_unchanged = std::uint32_t(next.scene.meshes.size() - changed.size());
         next_accel = build_top(next.scene, std::move(object_bvhs), settings_.rebraid, timer);
     }
+    next_accel->set_triangle_test(triangle_test_for(next));
     std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
     bounds_ = next.scene.bounds();
     converted_ = std::move(next);

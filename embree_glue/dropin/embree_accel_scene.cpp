@@ -125,6 +125,7 @@ public:
         if (root.has_uncommitted_changes)
             throw Error("EmbreeAccel: " + scene_text(snapshot_.root) +
                         " has geometries attached or detached since its last rtcCommitScene");
+        result_.is_robust = asks_for_robust_mode(snapshot_.root);
         for (const auto& [geom_id, handle] : root.geometries) {
             const RegisteredGeometry& geometry = geometry_record(handle);
             const std::string where = geometry_text(snapshot_.root, geom_id, geometry);
@@ -224,6 +225,11 @@ private:
         result_.instance_ids.push_back(ids);
         result_.instance_geometries.push_back(instance_handle);
         result_.triangle_scenes.push_back(triangle_scene);
+        result_.is_robust = result_.is_robust || asks_for_robust_mode(triangle_scene);
+    }
+
+    static bool asks_for_robust_mode(RTCScene scene) {
+        return (rtcGetSceneFlags(scene) & RTC_SCENE_FLAG_ROBUST) != 0;
     }
 
     const RegisteredSceneSnapshot& snapshot_;

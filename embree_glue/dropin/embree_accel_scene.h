@@ -30,6 +30,10 @@ struct ConvertedEmbreeScene {
     std::vector<RTCGeometry> instance_geometries;  ///< index = InstanceId; null at top level
     /// index = InstanceId: the scene holding the instance's triangle geometry.
     std::vector<RTCScene> triangle_scenes;
+    /// True when the root scene or a scene holding triangles it traces asks Embree for
+    /// robust mode (RTC_SCENE_FLAG_ROBUST): the structure then runs the watertight triangle
+    /// test, as Embree's robust mode does, and the Möller test otherwise, as its default mode.
+    bool is_robust = false;
 };
 
 /// Converts `snapshot`, copying vertices and indices out of the application's buffers.

@@ -23,7 +23,9 @@ struct LastAnswer {
 thread_local LastAnswer t_last_answer __attribute__((tls_model("initial-exec")));
 
 /// Throws rebraid::Error when a scene the structure would cover asks Embree for robust
-/// intersection, whose hits at edges and vertices the structure does not reproduce.
+/// intersection: EmbreeAccel traces such a scene with the watertight test, as Embree's robust
+/// mode does, but reports t, u, v in the rounding of Embree's default kernels, not its robust
+/// ones, so the hits would differ from Embree's in their last bits.
 void check_scene_flags(RTCScene scene) {
     const std::optional<RegisteredSceneSnapshot> snapshot = snapshot_registered_scene(scene);
     if (!snapshot) return;  // EmbreeAccel says why it cannot serve the scene

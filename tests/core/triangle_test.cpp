@@ -226,8 +226,7 @@ TEST(Triangle, MollerTestAgreesWithTheWatertightOneAwayFromEdges) {
         const TriangleVerts tri{point(), point(), point()};
         const Vec3f org = point() * 3.0f, target = point();
         const TriangleHit watertight = trace(tri, org, target - org);
-        const TriangleHit moller =
-            trace(tri, org, target - org, 0.0f, kInf, TriangleTest::moller);
+        const TriangleHit moller = trace(tri, org, target - org, 0.0f, kInf, TriangleTest::moller);
         if (watertight.is_hit &&
             std::min({watertight.u, watertight.v, 1.0f - watertight.u - watertight.v}) < 1e-3f)
             continue;

@@ -44,6 +44,25 @@ TEST(EmbreeAccel, MatchesEmbreeWithRtcBuildBvhObjectBuilder) {
     expect_accel_matches_embree(embree_scene->top, accel, 2);
 }
 
+// Embree's robust mode is watertight, its default mode runs the Möller test: EmbreeAccel
+// follows the scene's RTC_SCENE_FLAG_ROBUST at construction and at every update.
+TEST(EmbreeAccel, TracesRobustScenesWithTheWatertightTest) {
+    Device app;
+    const Scene scene = make_default_scene();
+    const auto embree_scene = feed_to_embree(app.device, scene, /*flatten_every=*/7);
+    EXPECT_EQ(EmbreeAccel(embree_scene->top).accel().triangle_test(), TriangleTest::moller);
+    rtcSetSceneFlags(embree_scene->top, RTC_SCENE_FLAG_ROBUST);
+    rtcCommitScene(embree_scene->top);
+    EmbreeAccel accel(embree_scene->top);
+    EXPECT_EQ(accel.accel().triangle_test(), TriangleTest::watertight);
+    EXPECT_TRUE(accel.converted_scene().is_robust);
+    rtcSetSceneFlags(embree_scene->top, RTC_SCENE_FLAG_NONE);
+    rtcCommitScene(embree_scene->top);
+    accel.update();
+    EXPECT_EQ(accel.accel().triangle_test(), TriangleTest::moller);
+    EXPECT_FALSE(accel.converted_scene().is_robust);
+}
+
 class EmbreeAccelOnSharedScene : public testing::TestWithParam<std::string> {};
 
 TEST_P(EmbreeAccelOnSharedScene, MatchesEmbree) {
