@@ -119,6 +119,7 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
     accel_ = std::make_unique<InstancedAccel>(
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
     accel_->set_triangle_test(triangle_test_for(converted_));
+    accel_->set_world_to_object(embree_world_to_object_);
     bounds_ = converted_.scene.bounds();
     pad_bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
@@ -222,18 +223,31 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
 struct EmbreeAccel::PendingAttributes {
     const EmbreeAccel& accel;
     const Ray& ray;
+    /// A coordinate of the ray is zero: mapping it through an identity transform, as Embree
+    /// does for an instance placed by the identity (which our traversal enters with the world
+    /// ray itself), may flip a zero's sign, so such hits take the recomputation.
+    bool has_zero_coordinate;
     std::optional<glue::EmbreeHitAttributes> attributes;
 
     static void on_closer_hit(void* context, InstanceId instance, const HitTriangle& triangle) {
         auto& pending = *static_cast<PendingAttributes*>(context);
         const EmbreeAccel& accel = pending.accel;
         const TriangleVerts& corners = triangle.corners;
-        // Our traversal finds the triangle and t; the reported attributes are computed again
-        // the way Embree computes them (its world-to-object map, its kernel's rounding), so
-        // that they agree with rtcIntersect1 to the last bit where Embree finds the same
-        // triangle.
         const bool is_instanced =
             accel.converted_.instance_ids[instance].inst_id != RTC_INVALID_GEOMETRY_ID;
+        // Our traversal finds the triangle and t; the reported attributes must be Embree's to
+        // the last bit. The SIMD kernels' Möller test computed Embree's own terms (the ray in
+        // Embree's object space: set_world_to_object), so Embree's reciprocal finishes them;
+        // otherwise they are computed again the way Embree computes them (its world-to-object
+        // map, its kernel's rounding).
+        if (triangle.has_moller_terms &&
+            !(is_instanced && pending.has_zero_coordinate &&
+              accel.accel_->instance_targets()[instance].space == InstanceTarget::kWorldSpace)) {
+            pending.attributes =
+                glue::embree_hit_attributes_from_terms(triangle.moller_terms, accel.arithmetic_);
+            if (pending.attributes || accel.arithmetic_ != glue::EmbreeKernelArithmetic::separate)
+                return;
+        }
         pending.attributes = glue::embree_hit_attributes(
             pending.ray, is_instanced ? &accel.embree_world_to_object_[instance] : nullptr,
             {corners.v0, corners.v1, corners.v2}, accel.arithmetic_);
@@ -243,7 +257,9 @@ struct EmbreeAccel::PendingAttributes {
 void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
     const RTCRay& in = rayhit.ray;
     const Ray ray = glue::from_embree_ray(in);
-    PendingAttributes pending{*this, ray, std::nullopt};
+    const bool has_zero_coordinate = ray.org.x == 0.0f || ray.org.y == 0.0f || ray.org.z == 0.0f ||
+                                     ray.dir.x == 0.0f || ray.dir.y == 0.0f || ray.dir.z == 0.0f;
+    PendingAttributes pending{*this, ray, has_zero_coordinate, std::nullopt};
     const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
     const LocatedHit located = accel_->intersect_located(ray, &observer);
     const Hit& hit = located.hit;
@@ -322,6 +338,7 @@ EmbreeUpdateReport EmbreeAccel::update() {
     }
     next_accel->set_triangle_test(triangle_test_for(next));
     std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
+    next_accel->set_world_to_object(world_to_object);
     bounds_ = next.scene.bounds();
     converted_ = std::move(next);
     accel_ = std::move(next_accel);

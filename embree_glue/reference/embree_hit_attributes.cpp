@@ -106,6 +106,20 @@ Vec3f kernel_transform_vector(const AffineTransform& m, Vec3f d) {
     return out;
 }
 
+/// Embree's attributes from the test's terms: its reciprocal of |den| times each.
+template <typename Ops>
+std::optional<EmbreeHitAttributes> attributes_from_terms(const MollerTerms& terms) {
+    const float reciprocal = kernel_reciprocal<Ops>(terms.abs_den);
+    EmbreeHitAttributes hit;
+    hit.t = terms.scaled_t * reciprocal;
+    hit.u = terms.scaled_u * reciprocal;
+    hit.v = terms.scaled_v * reciprocal;
+    hit.geometry_normal = terms.normal;
+    if (!std::isfinite(hit.t) || !std::isfinite(hit.u) || !std::isfinite(hit.v))
+        return std::nullopt;
+    return hit;
+}
+
 template <typename Ops>
 std::optional<EmbreeHitAttributes> hit_attributes(const Ray& world_ray,
                                                   const AffineTransform* world_to_object,
@@ -211,6 +225,26 @@ std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
     if (arithmetic == EmbreeKernelArithmetic::fused)
         return hit_attributes<FusedOps>(world_ray, world_to_object, corners);
     return hit_attributes<SeparateOps>(world_ray, world_to_object, corners);
+}
+
+namespace {
+
+#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx512f"), flatten))
+#endif
+std::optional<EmbreeHitAttributes>
+attributes_from_terms_rcp14(const MollerTerms& terms) {
+    return attributes_from_terms<FusedRcp14Ops>(terms);
+}
+
+}  // namespace
+
+std::optional<EmbreeHitAttributes> embree_hit_attributes_from_terms(
+    const MollerTerms& terms, EmbreeKernelArithmetic arithmetic) {
+    if (arithmetic == EmbreeKernelArithmetic::fused_rcp14)
+        return attributes_from_terms_rcp14(terms);
+    if (arithmetic == EmbreeKernelArithmetic::fused) return attributes_from_terms<FusedOps>(terms);
+    return std::nullopt;
 }
 
 }  // namespace rebraid::glue

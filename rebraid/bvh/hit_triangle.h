@@ -7,6 +7,17 @@
 
 namespace rebraid {
 
+/// The terms of the Möller test (TriangleTest::moller) for a hit, before the division by
+/// |n.dir|, as the SIMD kernels computed them in the object space the ray was traced in:
+/// u = scaled_u / abs_den, v = scaled_v / abs_den, t = scaled_t / abs_den, and the
+/// unnormalised normal n = (v2 - v0) x (v0 - v1). A caller that must report Embree's
+/// attributes to the last bit finishes them with Embree's reciprocal instead of computing
+/// the test again (embree_glue).
+struct MollerTerms {
+    float scaled_u = 0.0f, scaled_v = 0.0f, scaled_t = 0.0f, abs_den = 0.0f;
+    Vec3f normal;
+};
+
 /// Where a hit triangle is kept in its object BVH, and its corners as kept there (object
 /// space): what a caller that recomputes hit attributes from the triangle reads next.
 struct HitTriangle {
@@ -14,6 +25,10 @@ struct HitTriangle {
     /// kInvalidId when the ray hits nothing.
     std::uint32_t leaf_position = kInvalidId;
     TriangleVerts corners{};
+    /// The Möller test's terms of the hit, when the query ran that test in a SIMD kernel
+    /// (has_moller_terms); the portable kernels and the watertight test leave them out.
+    MollerTerms moller_terms;
+    bool has_moller_terms = false;
 };
 
 }  // namespace rebraid

@@ -55,13 +55,13 @@ public:
         }
     }
     /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any, by
-    /// the test `kTest`.
+    /// the test `kTest` (and its terms in `terms`, when given: intersect_triangle_lanes).
     template <TriangleTest kTest>
-    bool intersect(const TriangleGroupRay& ray, float tnear, float tfar,
-                   TriangleGroupHit& hit) const {
+    bool intersect(const TriangleGroupRay& ray, float tnear, float tfar, TriangleGroupHit& hit,
+                   MollerTerms* terms = nullptr) const {
         __m256 rows[9];
         load_rows(rows);
-        return intersect_triangle_rows<kTest>(rows, count_, ray, tnear, tfar, hit);
+        return intersect_triangle_rows<kTest>(rows, count_, ray, tnear, tfar, hit, terms);
     }
     /// Whether the ray hits any of the gathered triangles within [tnear, tfar].
     template <TriangleTest kTest>

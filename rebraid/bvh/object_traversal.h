@@ -61,11 +61,11 @@ public:
     }
     std::uint32_t count() const { return count_; }
     /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any, by
-    /// the test `kTest`.
+    /// the test `kTest` (and its terms in `terms`, when given: intersect_triangle_lanes).
     template <TriangleTest kTest>
-    bool intersect(const TriangleGroupRay& ray, float tnear, float tfar,
-                   TriangleGroupHit& hit) const {
-        return intersect_triangle_lanes<kTest>(lanes_, count_, ray, tnear, tfar, hit);
+    bool intersect(const TriangleGroupRay& ray, float tnear, float tfar, TriangleGroupHit& hit,
+                   MollerTerms* terms = nullptr) const {
+        return intersect_triangle_lanes<kTest>(lanes_, count_, ray, tnear, tfar, hit, terms);
     }
     /// Whether the ray hits any of the gathered triangles within [tnear, tfar].
     template <TriangleTest kTest>
@@ -103,19 +103,30 @@ void add_leaves_and_test(Lanes& lanes, const NodeRef* refs, unsigned slots,
     test();
 }
 
+/// Whether this kernel's closest-hit queries with the test `kTest` give a hit's Möller terms
+/// (MollerTerms): the SIMD kernels' Möller test does.
+template <TriangleTest kTest>
+constexpr bool moller_terms_computed() {
+#ifdef REBRAID_SIMD_AVX2
+    return kTest == TriangleTest::moller;
+#else
+    return false;
+#endif
+}
+
 namespace object_traversal_detail {
 
 /// intersect_object_bvh_leaf_order with `lanes` gathering the leaves' triangles.
 template <TriangleTest kTest, class Lanes, class HitDataPrefetch>
 bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                           Hit& hit, TraversalCounters* counters,
-                          HitDataPrefetch&& prefetch_hit_data) {
+                          HitDataPrefetch&& prefetch_hit_data, MollerTerms* terms) {
     TraversalRay& ray = prepared.ray;
     const TriangleGroupRay& group_ray = prepared.triangle_ray;
     bool found = false;
     const auto test_lanes = [&] {
         TriangleGroupHit group_hit;
-        if (lanes.template intersect<kTest>(group_ray, ray.tnear, ray.tfar, group_hit)) {
+        if (lanes.template intersect<kTest>(group_ray, ray.tnear, ray.tfar, group_hit, terms)) {
             ray.tfar = group_hit.t;
             hit.t = group_hit.t;
             hit.u = group_hit.u;
@@ -169,23 +180,26 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
 /// data the test has just read: the caller prefetches what it will look up for the final hit
 /// (ids in leaf order), so that the lookup's cache miss overlaps the rest of the traversal,
 /// or copies the corners. (Asking for every visited leaf's ids instead cost more than the
-/// misses it hid.) `start_leaf` says what a leaf `start` may be (StartLeaf).
+/// misses it hid.) `start_leaf` says what a leaf `start` may be (StartLeaf). With `terms`
+/// given, a SIMD kernel's Möller test writes each closer hit's terms there before
+/// `prefetch_hit_data` is called (moller_terms_computed).
 template <TriangleTest kTest, class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                      Hit& hit, TraversalCounters* counters,
                                      HitDataPrefetch&& prefetch_hit_data = {},
-                                     [[maybe_unused]] StartLeaf start_leaf = StartLeaf::whole) {
+                                     [[maybe_unused]] StartLeaf start_leaf = StartLeaf::whole,
+                                     MollerTerms* terms = nullptr) {
     using namespace object_traversal_detail;
 #ifdef REBRAID_SIMD_AVX2
     if (rows_serve(bvh, start, start_leaf)) {
         LeafRowLanes lanes(bvh.leaf_rows);
         return intersect_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, hit, counters,
-                                           prefetch_hit_data);
+                                           prefetch_hit_data, terms);
     }
 #endif
     LeafTriangleLanes lanes(bvh.triangles);
     return intersect_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, hit, counters,
-                                       prefetch_hit_data);
+                                       prefetch_hit_data, terms);
 }
 
 /// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
@@ -194,7 +208,9 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 /// With `located` given, also sets located->leaf_position to the hit's leaf-order position
 /// and located->corners to its corners, copied as each closer hit is found from the leaf data
 /// the test had just read (that caller reads them next: from ObjectBvh::triangles they would
-/// cost a cache miss), and then calls `on_closer_hit(*located)`. `start_leaf`: see StartLeaf.
+/// cost a cache miss), and its Möller terms where this kernel computes them
+/// (moller_terms_computed), and then calls `on_closer_hit(*located)`. `start_leaf`: see
+/// StartLeaf.
 template <TriangleTest kTest, class OnCloserHit = void (*)(const HitTriangle&)>
 bool intersect_object_bvh(
     ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit, TraversalCounters* counters,
@@ -207,11 +223,13 @@ bool intersect_object_bvh(
         if (located != nullptr) {
             located->leaf_position = position;
             located->corners = corners();
+            located->has_moller_terms = moller_terms_computed<kTest>();
             on_closer_hit(*located);
         }
     };
-    if (!intersect_object_bvh_leaf_order<kTest>(bvh, start, ray, leaf_order_hit, counters,
-                                                prefetch_hit_data, start_leaf))
+    if (!intersect_object_bvh_leaf_order<kTest>(
+            bvh, start, ray, leaf_order_hit, counters, prefetch_hit_data, start_leaf,
+            located != nullptr ? &located->moller_terms : nullptr))
         return false;
     hit = leaf_order_hit;
     hit.prim_id = prim_ids[leaf_order_hit.prim_id];

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstdint>
 
+#include "rebraid/bvh/hit_triangle.h"
 #include "rebraid/core/simd_config.h"
 #include "rebraid/core/triangle.h"
 #include "rebraid/core/triangle_test.h"
@@ -163,12 +164,14 @@ template <>
 struct GroupTest<TriangleTest::moller> {
     unsigned mask = 0;
     __m256 w1, w2, sum, t;
+    Vec3x8 normal;
+    __m256 scaled_t;
 
     GroupTest(const GroupCorners& corners, std::uint32_t count, const TriangleGroupRay& ray,
               float tnear, float tfar) {
         const Vec3x8 e1 = corners.corner[0] - corners.corner[1];
         const Vec3x8 e2 = corners.corner[2] - corners.corner[0];
-        const Vec3x8 normal = cross(e2, e1);
+        normal = cross(e2, e1);
         const Vec3x8 c = corners.corner[0] - Vec3x8{ray.org[0], ray.org[1], ray.org[2]};
         const Vec3x8 r = cross(c, Vec3x8{ray.dir[0], ray.dir[1], ray.dir[2]});
         const __m256 den = dot(normal, ray.dir);
@@ -184,7 +187,8 @@ struct GroupTest<TriangleTest::moller> {
                           _mm256_cmp_ps(sum, zero, _CMP_NEQ_OQ)));
         mask = unsigned(_mm256_movemask_ps(inside)) & ((1u << count) - 1u);
         if (mask == 0) return;  // the common case: the ray passes beside every triangle
-        t = _mm256_div_ps(_mm256_xor_ps(dot(normal, c), den_sign), sum);
+        scaled_t = _mm256_xor_ps(dot(normal, c), den_sign);
+        t = _mm256_div_ps(scaled_t, sum);
         const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(t, _mm256_set1_ps(tnear), _CMP_GE_OQ),
                                               _mm256_cmp_ps(t, _mm256_set1_ps(tfar), _CMP_LE_OQ));
         mask &= unsigned(_mm256_movemask_ps(in_range));
@@ -210,20 +214,45 @@ TriangleGroupHit closest_lane(const Test& test) {
     return {best, t[best], w1[best] * inv_sum, w2[best] * inv_sum};
 }
 
+/// The Möller terms of `lane` of a test.
+inline MollerTerms moller_terms_of(const GroupTest<TriangleTest::moller>& test,
+                                   std::uint32_t lane) {
+    alignas(32) float values[7][kTriangleGroupSize];
+    const __m256 rows[7] = {test.w1,       test.w2,       test.scaled_t, test.sum,
+                            test.normal.x, test.normal.y, test.normal.z};
+    for (int r = 0; r < 7; ++r) _mm256_store_ps(values[r], rows[r]);
+    return {values[0][lane],
+            values[1][lane],
+            values[2][lane],
+            values[3][lane],
+            {values[4][lane], values[5][lane], values[6][lane]}};
+}
+
+/// Fills `terms` (when not null) with the hit lane's Möller terms; the watertight test has
+/// none, and `terms` is left alone.
+template <TriangleTest kTest>
+void take_moller_terms(const GroupTest<kTest>& test, std::uint32_t lane, MollerTerms* terms) {
+    if constexpr (kTest == TriangleTest::moller)
+        if (terms != nullptr) *terms = moller_terms_of(test, lane);
+}
+
 }  // namespace triangle_group_detail
 
 /// Closest hit among `count` (1..8) triangles from anywhere, `lanes[i]` pointing at the i-th
 /// (e.g. the triangles of several small leaves, tested together), with tnear <= t <= tfar;
 /// hit.index is the lane, and on a tie the lower lane wins. Returns false when none is hit.
+/// With `terms` given, the Möller test also writes the hit's terms there (the watertight
+/// test and the portable kernels have none and leave it alone).
 template <TriangleTest kTest>
 bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
                               const TriangleGroupRay& ray, float tnear, float tfar,
-                              TriangleGroupHit& hit) {
+                              TriangleGroupHit& hit, MollerTerms* terms = nullptr) {
     using namespace triangle_group_detail;
     const GroupCorners corners([lanes](std::uint32_t i) { return lanes[i]; }, count);
     const GroupTest<kTest> test(corners, count, ray, tnear, tfar);
     if (test.mask == 0) return false;
     hit = closest_lane(test);
+    take_moller_terms(test, hit.index, terms);
     return true;
 }
 
@@ -241,11 +270,12 @@ bool occluded_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t co
 template <TriangleTest kTest>
 bool intersect_triangle_rows(const __m256 (&rows)[9], std::uint32_t count,
                              const TriangleGroupRay& ray, float tnear, float tfar,
-                             TriangleGroupHit& hit) {
+                             TriangleGroupHit& hit, MollerTerms* terms = nullptr) {
     using namespace triangle_group_detail;
     const GroupTest<kTest> test(GroupCorners(rows), count, ray, tnear, tfar);
     if (test.mask == 0) return false;
     hit = closest_lane(test);
+    take_moller_terms(test, hit.index, terms);
     return true;
 }
 
@@ -268,7 +298,7 @@ struct TriangleGroupRay {
 template <TriangleTest kTest>
 bool intersect_triangle_lanes(const TriangleVerts* const* lanes, std::uint32_t count,
                               const TriangleGroupRay& ray, float tnear, float tfar,
-                              TriangleGroupHit& hit) {
+                              TriangleGroupHit& hit, MollerTerms* /*terms: none here*/ = nullptr) {
     bool found = false;
     for (std::uint32_t i = 0; i < count; ++i) {
         float t, u, v;

@@ -142,6 +142,18 @@ void InstancedAccel::set_simd_level(SimdLevel level) {
     simd_level_ = level;
 }
 
+void InstancedAccel::set_world_to_object(std::span<const AffineTransform> world_to_object) {
+    if (world_to_object.size() != instance_targets_.size())
+        throw Error(
+            "InstancedAccel::set_world_to_object: " + std::to_string(world_to_object.size()) +
+            " maps for " + std::to_string(instance_targets_.size()) + " instances");
+    // Instances placed alike share a space (share_object_spaces); maps computed from equal
+    // transforms are equal, so the spaces stay right.
+    for (std::size_t i = 0; i < instance_targets_.size(); ++i)
+        if (instance_targets_[i].space != InstanceTarget::kWorldSpace)
+            instance_targets_[i].to_object = world_to_object[i];
+}
+
 void InstancedAccel::set_triangle_test(TriangleTest test) {
     use_kernels(simd_level_, test);
     triangle_test_ = test;

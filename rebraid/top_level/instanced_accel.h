@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "rebraid/bvh/build_settings.h"
@@ -62,6 +63,14 @@ public:
     const std::vector<InstanceTarget>& instance_targets() const { return instance_targets_; }
     /// The arrays traversal reads of each mesh's object BVH (index = MeshId).
     const std::vector<ObjectBvhView>& object_views() const { return object_views_; }
+
+    /// Replaces the world-to-object map of every instance not placed by the identity with
+    /// `world_to_object[i]` (index = InstanceId; each an inverse of the instance's
+    /// object_to_world, computed another way): the maps rays are traced with from now on.
+    /// The drop-in passes Embree's own inverses, so that its rays enter objects with Embree's
+    /// bits (trace_kernel_bodies.h, map_into_object_space). Throws rebraid::Error when the
+    /// count differs from the instances'. Not while tracing.
+    void set_world_to_object(std::span<const AffineTransform> world_to_object);
 
     /// The kernel level rays are traced with: default_simd_level() at construction.
     SimdLevel simd_level() const { return simd_level_; }

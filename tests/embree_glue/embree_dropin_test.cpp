@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -14,9 +15,13 @@
 
 #include "rebraid/core/error.h"
 #include "rebraid/core/random.h"
+#include "rebraid/core/simd_level.h"
+#include "rebraid/core/triangle_test.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/generators/random_rays.h"
 #include "rebraid/io/gltf_scene.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/top_level/instanced_accel.h"
 #include "support/embree_dropin_app.h"
 
 namespace rebraid {
@@ -167,6 +172,65 @@ TEST(EmbreeHitAttributes, ReproduceEmbreesAvx2KernelsBitForBit) {
     if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma"))
         GTEST_SKIP() << "no AVX2 and FMA on this CPU";
     expect_bit_identical_attributes("isa=avx2", glue::EmbreeKernelArithmetic::fused);
+}
+
+// The SIMD kernels' Möller test computes Embree's own terms when rays enter instances through
+// Embree's world-to-object maps: finishing them (embree_hit_attributes_from_terms) gives what
+// the full recomputation gives, bit for bit, in both fused arithmetics. The portable kernels
+// and the watertight test give no terms.
+TEST(EmbreeHitAttributes, TraversalTermsFinishToTheRecomputedAttributesBitForBit) {
+    const Scene scene = make_default_scene();
+    InstancedAccel accel = build_rebraid_accel(scene);
+    std::vector<AffineTransform> maps;
+    for (const Instance& instance : scene.instances)
+        maps.push_back(glue::embree_world_to_object(instance.object_to_world));
+    accel.set_world_to_object(maps);
+    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 4000, 5);
+    for (SimdLevel level : runnable_simd_levels()) {
+        accel.set_simd_level(level);
+        for (TriangleTest test : {TriangleTest::moller, TriangleTest::watertight}) {
+            SCOPED_TRACE(std::string(simd_level_name(level)) + " " +
+                         std::string(triangle_test_name(test)));
+            accel.set_triangle_test(test);
+            const bool gives_terms = level != SimdLevel::portable && test == TriangleTest::moller;
+            std::size_t compared = 0;
+            for (const Ray& ray : rays) {
+                const LocatedHit located = accel.intersect_located(ray);
+                if (!located.hit.is_hit()) continue;
+                ASSERT_EQ(located.triangle.has_moller_terms, gives_terms);
+                if (!gives_terms) continue;
+                const bool is_identity = scene.instances[located.hit.instance_id].object_to_world ==
+                                         AffineTransform::identity();
+                const TriangleVerts& c = located.triangle.corners;
+                for (auto arithmetic : {glue::EmbreeKernelArithmetic::fused,
+                                        glue::EmbreeKernelArithmetic::fused_rcp14}) {
+                    if (arithmetic == glue::EmbreeKernelArithmetic::fused_rcp14 &&
+                        !__builtin_cpu_supports("avx512f"))
+                        continue;
+                    const auto finished = glue::embree_hit_attributes_from_terms(
+                        located.triangle.moller_terms, arithmetic);
+                    const auto recomputed = glue::embree_hit_attributes(
+                        ray, is_identity ? nullptr : &maps[located.hit.instance_id],
+                        {c.v0, c.v1, c.v2}, arithmetic);
+                    ASSERT_EQ(finished.has_value(), recomputed.has_value());
+                    if (!finished) continue;
+                    ++compared;
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->t),
+                              std::bit_cast<std::uint32_t>(recomputed->t));
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->u),
+                              std::bit_cast<std::uint32_t>(recomputed->u));
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->v),
+                              std::bit_cast<std::uint32_t>(recomputed->v));
+                    EXPECT_EQ(finished->geometry_normal.x, recomputed->geometry_normal.x);
+                    EXPECT_EQ(finished->geometry_normal.y, recomputed->geometry_normal.y);
+                    EXPECT_EQ(finished->geometry_normal.z, recomputed->geometry_normal.z);
+                }
+            }
+            if (gives_terms) {
+                EXPECT_GT(compared, 400u);
+            }
+        }
+    }
 }
 
 TEST(EmbreeHitAttributes, ReproduceEmbreesSse42KernelsBitForBit) {
