@@ -85,6 +85,14 @@ TriangleTest triangle_test_for(const glue::ConvertedEmbreeScene& converted) {
     return converted.is_robust ? TriangleTest::watertight : TriangleTest::moller;
 }
 
+/// Whether `accel`'s closest-hit queries give Embree's own Möller terms in `arithmetic`
+/// (EmbreeAccel::finishes_moller_terms_).
+bool finishes_moller_terms(const InstancedAccel& accel, glue::EmbreeKernelArithmetic arithmetic) {
+    return accel.simd_level() != SimdLevel::portable &&
+           accel.triangle_test() == TriangleTest::moller &&
+           arithmetic != glue::EmbreeKernelArithmetic::separate;
+}
+
 /// Embree's world-to-object map of each instance (index = InstanceId).
 std::vector<AffineTransform> embree_world_to_object_maps(const Scene& scene) {
     std::vector<AffineTransform> maps;
@@ -120,6 +128,7 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
     accel_->set_triangle_test(triangle_test_for(converted_));
     accel_->set_world_to_object(embree_world_to_object_);
+    finishes_moller_terms_ = finishes_moller_terms(*accel_, arithmetic_);
     bounds_ = converted_.scene.bounds();
     pad_bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
@@ -217,9 +226,10 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     intersect_within_bounds(rayhit);
 }
 
-/// Embree's attributes of each closer hit, computed as the query finds it (the last one
-/// computed is the closest hit's): that work then overlaps the rest of the traversal instead
-/// of following it.
+/// Embree's attributes of a hit: of each closer hit as the query finds it (the last one
+/// computed is the closest hit's), so that a recomputation overlaps the rest of the traversal
+/// instead of following it; or, where the query gives Embree's own terms
+/// (finishes_moller_terms_), once for the closest hit after the query.
 struct EmbreeAccel::PendingAttributes {
     const EmbreeAccel& accel;
     const Ray& ray;
@@ -261,9 +271,12 @@ void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
                                      ray.dir.x == 0.0f || ray.dir.y == 0.0f || ray.dir.z == 0.0f;
     PendingAttributes pending{*this, ray, has_zero_coordinate, std::nullopt};
     const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
-    const LocatedHit located = accel_->intersect_located(ray, &observer);
+    const LocatedHit located =
+        accel_->intersect_located(ray, finishes_moller_terms_ ? nullptr : &observer);
     const Hit& hit = located.hit;
     if (!hit.is_hit()) return;
+    if (finishes_moller_terms_)
+        PendingAttributes::on_closer_hit(&pending, hit.instance_id, located.triangle);
     const glue::EmbreeHitIds& ids = converted_.instance_ids[hit.instance_id];
     // The corners as the query copied them from the leaf it tested (the mesh's index and
     // vertex arrays, or the object BVH's corner copy, would cost cache misses).
@@ -344,6 +357,7 @@ EmbreeUpdateReport EmbreeAccel::update() {
     accel_ = std::move(next_accel);
     pad_bounds();  // of the new top level
     embree_world_to_object_ = std::move(world_to_object);
+    finishes_moller_terms_ = finishes_moller_terms(*accel_, arithmetic_);
     report.update_ms = timer.elapsed_ms();
     return report;
 }

@@ -141,6 +141,10 @@ private:
     bool is_ray_mask_supported_ = false;
     /// How Embree rounds on this machine: the hit attributes are computed the same way.
     glue::EmbreeKernelArithmetic arithmetic_ = glue::EmbreeKernelArithmetic::separate;
+    /// The structure's queries give Embree's own Möller terms (a SIMD kernel, the Möller
+    /// test, fused arithmetic): the closest hit's attributes are finished from them once,
+    /// after the traversal, rather than computed for every closer hit as it is found.
+    bool finishes_moller_terms_ = false;
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;
