@@ -110,12 +110,14 @@ struct GroupCorners {
     }
 };
 
-/// Lanes (bits) of the group whose triangle the ray hits with tnear <= t <= tfar, with the
-/// edge weights and t per lane. Same arithmetic as intersect_triangle(), eight at a time
-/// (with fused multiply-adds, which keep the exact negation of shared edges' functions).
+/// The group test of the triangle test `kTest`: `mask` holds the lanes (bits) whose triangle
+/// the ray hits with tnear <= t <= tfar, and w1, w2, sum, t per lane give the hit
+/// (u = w1 / sum, v = w2 / sum).
 template <TriangleTest kTest>
 struct GroupTest;
 
+/// The watertight test: the same arithmetic as intersect_triangle(), eight at a time (with
+/// fused multiply-adds, which keep the exact negation of shared edges' functions).
 template <>
 struct GroupTest<TriangleTest::watertight> {
     unsigned mask = 0;
@@ -157,9 +159,12 @@ struct GroupTest<TriangleTest::watertight> {
     }
 };
 
-/// Lanes (bits) of the group whose triangle the ray hits with tnear <= t <= tfar: the same
-/// arithmetic as intersect_triangle_moller(), eight at a time, with w1, w2 the sign-corrected
-/// edge weights and `sum` |n.dir| (u = w1 / sum, v = w2 / sum).
+/// The Möller test: the steps of intersect_triangle_moller(), eight at a time, with w1, w2
+/// the sign-corrected edge weights and `sum` |n.dir|. Its products and sums are Embree's AVX2
+/// and AVX-512 kernels' own, fused the same way and in the same order (cross() and dot()
+/// above): the drop-in finishes Embree's hit attributes from these terms (MollerTerms), so
+/// changing the order of any operation here breaks its bit-identity with Embree
+/// (EmbreeHitAttributes.TraversalTermsFinishToTheRecomputedAttributesBitForBit).
 template <>
 struct GroupTest<TriangleTest::moller> {
     unsigned mask = 0;

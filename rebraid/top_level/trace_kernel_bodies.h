@@ -16,7 +16,7 @@ namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
 // The entry points are flattened (every call inside them inlined): in one unit with all
-// four, the compiler's unit-growth limits otherwise leave the traversal loops out of line and
+// of them, the compiler's unit-growth limits otherwise leave the traversal loops out of line and
 // its register allocation worse, 8-15 % more instructions per ray than each query compiled
 // alone (callgrind, diffuse rays of fzk_haus and cg57_cruiser).
 
