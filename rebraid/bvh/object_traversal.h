@@ -171,17 +171,16 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
 
 }  // namespace object_traversal_detail
 
-/// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
-/// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and hit.prim_id to the hit's
-/// position in leaf order (index into bvh.prim_ids and bvh.triangles), and returns true;
-/// leaves hit.instance_id to the caller.
-/// `prefetch_hit_data(position, corners)` is called with the leaf-order position of every
-/// closer hit as it is found, and `corners()` gives that triangle's corners from the leaf
-/// data the test has just read: the caller prefetches what it will look up for the final hit
-/// (ids in leaf order), so that the lookup's cache miss overlaps the rest of the traversal,
-/// or copies the corners. (Asking for every visited leaf's ids instead cost more than the
-/// misses it hid.) `start_leaf` says what a leaf `start` may be (StartLeaf). With `terms`
-/// given, a SIMD kernel's Möller test writes each closer hit's terms there before
+/// Closest hit among the triangles below `start` (any node of `bvh`) by the triangle test
+/// `kTest`, for a ray already in the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and
+/// hit.prim_id to the hit's position in leaf order (index into bvh.prim_ids and bvh.triangles), and
+/// returns true; leaves hit.instance_id to the caller. `prefetch_hit_data(position, corners)` is
+/// called with the leaf-order position of every closer hit as it is found, and `corners()` gives
+/// that triangle's corners from the leaf data the test has just read: the caller prefetches what it
+/// will look up for the final hit (ids in leaf order), so that the lookup's cache miss overlaps the
+/// rest of the traversal, or copies the corners. (Asking for every visited leaf's ids instead cost
+/// more than the misses it hid.) `start_leaf` says what a leaf `start` may be (StartLeaf). With
+/// `terms` given, a SIMD kernel's Möller test writes each closer hit's terms there before
 /// `prefetch_hit_data` is called (moller_terms_computed).
 template <TriangleTest kTest, class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
@@ -202,15 +201,14 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
                                        prefetch_hit_data, terms);
 }
 
-/// Closest hit among the triangles below `start` (any node of `bvh`), for a ray already in
-/// the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v/prim_id (mesh primID) and
-/// returns true; leaves hit.instance_id to the caller.
-/// With `located` given, also sets located->leaf_position to the hit's leaf-order position
-/// and located->corners to its corners, copied as each closer hit is found from the leaf data
-/// the test had just read (that caller reads them next: from ObjectBvh::triangles they would
-/// cost a cache miss), and its Möller terms where this kernel computes them
-/// (moller_terms_computed), and then calls `on_closer_hit(*located)`. `start_leaf`: see
-/// StartLeaf.
+/// Closest hit among the triangles below `start` (any node of `bvh`) by the triangle test
+/// `kTest`, for a ray already in the BVH's space. On a closer hit sets ray.tfar and
+/// hit.t/u/v/prim_id (mesh primID) and returns true; leaves hit.instance_id to the caller. With
+/// `located` given, also sets located->leaf_position to the hit's leaf-order position and
+/// located->corners to its corners, copied as each closer hit is found from the leaf data the test
+/// had just read (that caller reads them next: from ObjectBvh::triangles they would cost a cache
+/// miss), and its Möller terms where this kernel computes them (moller_terms_computed), and then
+/// calls `on_closer_hit(*located)`. `start_leaf`: see StartLeaf.
 template <TriangleTest kTest, class OnCloserHit = void (*)(const HitTriangle&)>
 bool intersect_object_bvh(
     ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit, TraversalCounters* counters,
@@ -236,8 +234,8 @@ bool intersect_object_bvh(
     return true;
 }
 
-/// True when any triangle below `start` is hit within [ray.tnear, ray.tfar]; `start_leaf` as
-/// for intersect_object_bvh_leaf_order.
+/// True when any triangle below `start` is hit within [ray.tnear, ray.tfar] by the triangle
+/// test `kTest`; `start_leaf` as for intersect_object_bvh_leaf_order.
 template <TriangleTest kTest>
 bool occluded_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                          TraversalCounters* counters,
