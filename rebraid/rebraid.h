@@ -17,6 +17,7 @@
 #include "rebraid/core/ray.h"
 #include "rebraid/core/scene.h"
 #include "rebraid/core/transform.h"
+#include "rebraid/core/triangle_test.h"
 #include "rebraid/core/types.h"
 
 // Object BVHs: the project's builder and its settings.
