@@ -78,6 +78,24 @@ inline bool grazes_edge(const Hit& hit, const Tolerance& tolerance) {
     return hit.is_hit() && std::min({hit.u, hit.v, 1.0f - hit.u - hit.v}) < tolerance.edge_graze;
 }
 
+/// The corners of a hit's triangle in world space.
+struct WorldTriangle {
+    Vec3f a, b, c;
+    float twice_area() const { return length(cross(b - a, c - a)); }
+    float longest_edge_squared() const {
+        return std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
+    }
+};
+
+/// The world-space corners of the triangle `hit` names.
+inline WorldTriangle world_triangle(const Scene& scene, const Hit& hit) {
+    const Instance& instance = scene.instances[hit.instance_id];
+    const auto corners = scene.meshes[instance.mesh_id].corners(hit.prim_id);
+    return {instance.object_to_world.transform_point(corners[0]),
+            instance.object_to_world.transform_point(corners[1]),
+            instance.object_to_world.transform_point(corners[2])};
+}
+
 /// How far the barycentrics of a hit on `hit`'s triangle may move when the hit point moves by
 /// 64 ulps of the scene's magnitude within the triangle's plane: that distance over the
 /// triangle's smallest height (world space). Rays entering an instance are mapped into its
@@ -85,26 +103,16 @@ inline bool grazes_edge(const Hit& hit, const Tolerance& tolerance) {
 /// barycentric differences well above Tolerance::barycentric; two correct structures that map
 /// differently (or not at all, as a flat one) then differ by up to this much.
 inline float barycentric_rounding(const Scene& scene, const Hit& hit, const Tolerance& tolerance) {
-    const Instance& instance = scene.instances[hit.instance_id];
-    const auto corners = scene.meshes[instance.mesh_id].corners(hit.prim_id);
-    const Vec3f a = instance.object_to_world.transform_point(corners[0]);
-    const Vec3f b = instance.object_to_world.transform_point(corners[1]);
-    const Vec3f c = instance.object_to_world.transform_point(corners[2]);
-    const float longest =
-        std::sqrt(std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)}));
-    const float smallest_height = length(cross(b - a, c - a)) / longest;
+    const WorldTriangle triangle = world_triangle(scene, hit);
+    const float smallest_height =
+        triangle.twice_area() / std::sqrt(triangle.longest_edge_squared());
     return tolerance.scene_magnitude * 0x1.0p-18f / smallest_height;
 }
 
 /// True when `hit` names a sliver triangle (see Tolerance::sliver_quality), in world space.
 inline bool hits_sliver(const Scene& scene, const Hit& hit, const Tolerance& tolerance) {
-    const Instance& instance = scene.instances[hit.instance_id];
-    const auto corners = scene.meshes[instance.mesh_id].corners(hit.prim_id);
-    const Vec3f a = instance.object_to_world.transform_point(corners[0]);
-    const Vec3f b = instance.object_to_world.transform_point(corners[1]);
-    const Vec3f c = instance.object_to_world.transform_point(corners[2]);
-    const float longest = std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
-    return !(length(cross(b - a, c - a)) >= tolerance.sliver_quality * longest);
+    const WorldTriangle triangle = world_triangle(scene, hit);
+    return !(triangle.twice_area() >= tolerance.sliver_quality * triangle.longest_edge_squared());
 }
 
 /// True when `hit`'s instance, primitive and barycentrics name the world-space point the
