@@ -233,11 +233,15 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
 struct EmbreeAccel::PendingAttributes {
     const EmbreeAccel& accel;
     const Ray& ray;
-    /// A coordinate of the ray is zero: mapping it through an identity transform, as Embree
-    /// does for an instance placed by the identity (which our traversal enters with the world
-    /// ray itself), may flip a zero's sign, so such hits take the recomputation.
-    bool has_zero_coordinate;
     std::optional<glue::EmbreeHitAttributes> attributes;
+
+    /// True when a coordinate of `ray` is zero: mapping it through an identity transform, as
+    /// Embree does for an instance placed by the identity (which our traversal enters with
+    /// the world ray itself), may flip a zero's sign.
+    static bool has_zero_coordinate(const Ray& ray) {
+        return ray.org.x == 0.0f || ray.org.y == 0.0f || ray.org.z == 0.0f || ray.dir.x == 0.0f ||
+               ray.dir.y == 0.0f || ray.dir.z == 0.0f;
+    }
 
     static void on_closer_hit(void* context, InstanceId instance, const HitTriangle& triangle) {
         auto& pending = *static_cast<PendingAttributes*>(context);
@@ -250,13 +254,13 @@ struct EmbreeAccel::PendingAttributes {
         // Embree's object space: set_world_to_object), so Embree's reciprocal finishes them;
         // otherwise they are computed again the way Embree computes them (its world-to-object
         // map, its kernel's rounding).
-        if (triangle.has_moller_terms &&
-            !(is_instanced && pending.has_zero_coordinate &&
-              accel.accel_->instance_targets()[instance].space == InstanceTarget::kWorldSpace)) {
+        if (accel.finishes_moller_terms_ && triangle.has_moller_terms &&
+            !(is_instanced &&
+              accel.accel_->instance_targets()[instance].space == InstanceTarget::kWorldSpace &&
+              has_zero_coordinate(pending.ray))) {
             pending.attributes =
                 glue::embree_hit_attributes_from_terms(triangle.moller_terms, accel.arithmetic_);
-            if (pending.attributes || accel.arithmetic_ != glue::EmbreeKernelArithmetic::separate)
-                return;
+            return;
         }
         pending.attributes = glue::embree_hit_attributes(
             pending.ray, is_instanced ? &accel.embree_world_to_object_[instance] : nullptr,
@@ -267,9 +271,7 @@ struct EmbreeAccel::PendingAttributes {
 void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
     const RTCRay& in = rayhit.ray;
     const Ray ray = glue::from_embree_ray(in);
-    const bool has_zero_coordinate = ray.org.x == 0.0f || ray.org.y == 0.0f || ray.org.z == 0.0f ||
-                                     ray.dir.x == 0.0f || ray.dir.y == 0.0f || ray.dir.z == 0.0f;
-    PendingAttributes pending{*this, ray, has_zero_coordinate, std::nullopt};
+    PendingAttributes pending{*this, ray, std::nullopt};
     const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
     const LocatedHit located =
         accel_->intersect_located(ray, finishes_moller_terms_ ? nullptr : &observer);

@@ -132,29 +132,25 @@ std::optional<EmbreeHitAttributes> hit_attributes(const Ray& world_ray,
     const Vec3f& v0 = corners[0];
     const Vec3f edge1 = v0 - corners[1];
     const Vec3f edge2 = corners[2] - v0;
-    const Vec3f normal = kernel_cross<Ops>(edge2, edge1);
+    MollerTerms terms;
+    terms.normal = kernel_cross<Ops>(edge2, edge1);
     const Vec3f to_v0 = v0 - org;
     const Vec3f r = kernel_cross<Ops>(to_v0, dir);
-    const float den = kernel_dot<Ops>(normal, dir);
+    const float den = kernel_dot<Ops>(terms.normal, dir);
     if (!(den != 0.0f)) return std::nullopt;
     // Embree flips the sign bits of U, V and T when den is negative.
     const bool is_negative = std::signbit(den);
     auto with_den_sign = [is_negative](float x) { return is_negative ? -x : x; };
-    const float scaled_u = with_den_sign(kernel_dot<Ops>(r, edge2));
-    const float scaled_v = with_den_sign(kernel_dot<Ops>(r, edge1));
-    const float scaled_t = with_den_sign(kernel_dot<Ops>(normal, to_v0));
-    const float reciprocal = kernel_reciprocal<Ops>(std::fabs(den));
-    EmbreeHitAttributes hit;
-    hit.t = scaled_t * reciprocal;
-    hit.u = scaled_u * reciprocal;
-    hit.v = scaled_v * reciprocal;
-    hit.geometry_normal = normal;
-    if (!std::isfinite(hit.t) || !std::isfinite(hit.u) || !std::isfinite(hit.v))
-        return std::nullopt;
+    terms.scaled_u = with_den_sign(kernel_dot<Ops>(r, edge2));
+    terms.scaled_v = with_den_sign(kernel_dot<Ops>(r, edge1));
+    terms.scaled_t = with_den_sign(kernel_dot<Ops>(terms.normal, to_v0));
+    terms.abs_den = std::fabs(den);
+    std::optional<EmbreeHitAttributes> hit = attributes_from_terms<Ops>(terms);
+    if (!hit) return hit;
     // Our traversal's watertight test may accept a ray a rounding error outside this test's
     // edges; keep Embree's guarantee u, v >= 0 (the comparison keeps a -0 as Embree gives it).
-    if (hit.u < 0.0f) hit.u = 0.0f;
-    if (hit.v < 0.0f) hit.v = 0.0f;
+    if (hit->u < 0.0f) hit->u = 0.0f;
+    if (hit->v < 0.0f) hit->v = 0.0f;
     return hit;
 }
 
