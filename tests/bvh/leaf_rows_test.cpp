@@ -11,6 +11,7 @@
 #include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/object_bvh_builder.h"
 #include "rebraid/core/error.h"
+#include "rebraid/core/simd_level.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/generators/mesh_generators.h"
 #include "rebraid/generators/random_rays.h"
@@ -119,17 +120,29 @@ std::size_t count_partial_leaf_items(const InstancedAccel& accel) {
 // The kernels read the rows where they exist and the per-triangle corners where not (and for
 // re-braided BRefs of single triangles, which start inside a leaf: TopLevelBvh::
 // has_partial_leaves): both give the same answers, bit for bit, for the flat, two-level and
-// re-braided structures.
+// re-braided structures, with the kernels of every level this build and CPU run (the
+// portable ones read the corners either way).
+template <class Structure>
+void expect_same_with_and_without_rows(Structure& with_rows, Structure& without_rows,
+                                       const std::vector<Ray>& rays) {
+    for (SimdLevel level : runnable_simd_levels()) {
+        SCOPED_TRACE(simd_level_name(level));
+        with_rows.set_simd_level(level);
+        without_rows.set_simd_level(level);
+        expect_identical(test::trace_all(with_rows, rays), test::trace_all(without_rows, rays));
+    }
+}
+
 TEST(LeafRows, KernelsAnswerTheSameWithAndWithoutThem) {
     const Scene scene = make_default_scene();
     const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 20000, 11);
     BuildSettings with_rows, without_rows;
     without_rows.pre_arranged_leaves = false;
     {
-        const FlatAccel a(scene, with_rows), b(scene, without_rows);
+        FlatAccel a(scene, with_rows), b(scene, without_rows);
         EXPECT_FALSE(a.bvh().leaf_rows.empty());
         EXPECT_TRUE(b.bvh().leaf_rows.empty());
-        expect_identical(test::trace_all(a, rays), test::trace_all(b, rays));
+        expect_same_with_and_without_rows(a, b, rays);
     }
     RebraidSettings single_triangles;
     single_triangles.open_threshold = 0.0f;
@@ -137,9 +150,8 @@ TEST(LeafRows, KernelsAnswerTheSameWithAndWithoutThem) {
     single_triangles.open_leaves = true;
     single_triangles.opening_rule = OpeningRule::extent;
     for (const RebraidSettings& rebraid : {RebraidSettings{}, single_triangles}) {
-        const InstancedAccel a =
-            build_rebraid_accel(scene, own_object_bvh_builder(with_rows), rebraid);
-        const InstancedAccel b =
+        InstancedAccel a = build_rebraid_accel(scene, own_object_bvh_builder(with_rows), rebraid);
+        InstancedAccel b =
             build_rebraid_accel(scene, own_object_bvh_builder(without_rows), rebraid);
         // Leaf items of the default rules are whole leaves, which the rows serve; opened
         // leaves are marked, and their items read the corners.
@@ -148,11 +160,11 @@ TEST(LeafRows, KernelsAnswerTheSameWithAndWithoutThem) {
             EXPECT_GT(count_partial_leaf_items(a), 100u);
         else
             EXPECT_EQ(count_partial_leaf_items(a), 0u);
-        expect_identical(test::trace_all(a, rays), test::trace_all(b, rays));
+        expect_same_with_and_without_rows(a, b, rays);
     }
-    const InstancedAccel a = build_two_level_accel(scene, own_object_bvh_builder(with_rows));
-    const InstancedAccel b = build_two_level_accel(scene, own_object_bvh_builder(without_rows));
-    expect_identical(test::trace_all(a, rays), test::trace_all(b, rays));
+    InstancedAccel a = build_two_level_accel(scene, own_object_bvh_builder(with_rows));
+    InstancedAccel b = build_two_level_accel(scene, own_object_bvh_builder(without_rows));
+    expect_same_with_and_without_rows(a, b, rays);
 }
 
 }  // namespace
