@@ -122,7 +122,10 @@ RTCGeometry attach_triangle_mesh(EmbreeDevice& device, RTCScene scene, const Mes
     device.throw_if_error("rtcCommitGeometry(triangles)");
     rtcAttachGeometryByID(scene, geometry.get(), geom_id);
     device.throw_if_error("rtcAttachGeometryByID(triangles)");
-    return geometry.get();  // released here: the scene holds its own reference
+    // The scene holds its own reference now; ours goes.
+    RTCGeometry attached = geometry.release();
+    rtcReleaseGeometry(attached);
+    return attached;
 }
 
 }  // namespace rebraid::glue

@@ -28,7 +28,8 @@ public:
         advise_huge_pages(data_, count_ * sizeof(T));
     }
     ~ScratchBuffer() {
-        if (data_) ::operator delete(data_, count_ * sizeof(T), alignment_);
+        // The unsized form: the sized one needs -fsized-deallocation under clang.
+        if (data_) ::operator delete(data_, alignment_);
     }
     ScratchBuffer(const ScratchBuffer&) = delete;
     ScratchBuffer& operator=(const ScratchBuffer&) = delete;

@@ -80,10 +80,13 @@ inline std::size_t expect_boxes_enclose_geometry(const Scene& scene, const Insta
             // Farthest a corner, rounded as the builders' transform_point rounds it, lies
             // outside the box.
             float excess = 0.0f;
+            // A copy: lambdas may capture structured bindings only from clang 16 on.
+            const BBox3f leaf_box = box;
             for_each_corner_below(bvh, item.object_node, [&](Vec3f corner) {
                 const Vec3f p = instance.object_to_world.transform_point(corner);
-                excess = std::max({excess, box.min.x - p.x, p.x - box.max.x, box.min.y - p.y,
-                                   p.y - box.max.y, box.min.z - p.z, p.z - box.max.z});
+                excess = std::max({excess, leaf_box.min.x - p.x, p.x - leaf_box.max.x,
+                                   leaf_box.min.y - p.y, p.y - leaf_box.max.y, leaf_box.min.z - p.z,
+                                   p.z - leaf_box.max.z});
             });
             if (excess > 0.0f)
                 fail("item " + std::to_string(ref.first_prim() + i) + " (instance " +
