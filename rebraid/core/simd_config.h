@@ -5,7 +5,8 @@
 // the library). Two macros, defined before that inclusion, change the choice:
 // REBRAID_SIMD_FORCE_PORTABLE picks the portable kernels whatever the flags (the portable
 // kernel unit of an AVX2 build); REBRAID_SIMD_TARGET_AVX512 names the AVX-512 kernels, for the
-// unit that compiles them under `#pragma GCC target` (which does not define the ISA macros).
+// unit that compiles them under `#pragma GCC target` or clang's `#pragma clang attribute`
+// (which do not define the ISA macros).
 #if defined(__AVX2__) && defined(__FMA__) && !defined(REBRAID_SIMD_FORCE_PORTABLE)
 #include <immintrin.h>
 #define REBRAID_SIMD_AVX2 1

@@ -5,9 +5,7 @@
 
 #if defined(__x86_64__) && defined(__AVX2__) && defined(__FMA__)
 #define REBRAID_KERNELS_AVX2 1
-// The AVX-512 kernels are the AVX2 sources compiled under `#pragma GCC target`, which also
-// defines the ISA macros simd_config.h reads; clang has no such pragma.
-#if defined(__GNUC__) && !defined(__clang__)
+// The AVX-512 kernels are the AVX2 sources compiled with AVX-512 enabled for their functions
+// (`#pragma GCC target`, or clang's `#pragma clang attribute`).
 #define REBRAID_KERNELS_AVX512 1
-#endif
 #endif

@@ -7,11 +7,20 @@
 #include "rebraid/top_level/trace_kernel_levels.h"
 #include "rebraid/top_level/trace_kernel_prelude.h"
 
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq"))), \
+                             apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx512f,avx512vl,avx512bw,avx512dq")
+#endif
 #define REBRAID_SIMD_TARGET_AVX512 1
 #include "rebraid/top_level/trace_kernel_bodies.h"
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 
 namespace rebraid {
 
