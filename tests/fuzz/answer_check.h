@@ -119,7 +119,11 @@ inline AnswerComparison compare_answers(const Scene& scene, const Accel& referen
                     ++result.ties;
                     continue;
                 }
-                if (is_fragile_hit(scene, ray, actual, tolerance)) {
+                // As below, one side may pass a fragile triangle the other reports, here with
+                // another triangle just behind it.
+                const Hit& closer = expected.t <= actual.t ? expected : actual;
+                if (is_fragile_hit(scene, ray, actual, tolerance) ||
+                    is_fragile_hit(scene, ray, closer, tolerance)) {
                     ++result.excused_fragile;
                     continue;
                 }

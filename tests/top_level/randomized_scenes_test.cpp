@@ -170,6 +170,61 @@ TEST(RandomizedScenes, HitAtTnearOnAHugeSceneIsNotADisagreement) {
               "");
 }
 
+/// A structure that gives one fixed answer to every ray.
+class FixedAnswer final : public Accel {
+public:
+    explicit FixedAnswer(Hit hit) : hit_(hit) {}
+    Hit intersect_counted(const Ray&, TraversalCounters*) const override { return hit_; }
+    bool occluded(const Ray&) const override { return hit_.is_hit(); }
+    AccelStats stats() const override { return {}; }
+
+private:
+    Hit hit_;
+};
+
+// Found by fuzz_build_trace with clang's kernels: a triangle the ray grazes, 5e-5 in front of
+// another one, hit by Embree and passed by the structure, which reports the one behind. Two
+// triangles within the t tolerance are not a tie here (the grazed one's barycentrics do not
+// name the point at its t), and the grazed one is fragile: one side may pass it, as anywhere
+// else, even with another triangle right behind it.
+TEST(RandomizedScenes, PassingAGrazedTriangleJustInFrontOfAnotherIsNotADisagreement) {
+    Scene scene;
+    Mesh mesh;
+    mesh.name = "grazed and behind";
+    // Triangle 0 in the plane z = 0.005 (x - 1), which the ray along +x grazes at x = 1, at
+    // barycentrics (0.4, 0.4, 0.2); triangle 1 across the ray at x = 1.00005, triangle 2
+    // across it at x = 0.99999.
+    mesh.positions = {{0.5f, -1.0f, -0.0025f},  {0.5f, 1.0f, -0.0025f},  {3.0f, 0.0f, 0.01f},
+                      {1.00005f, -1.0f, -1.0f}, {1.00005f, 1.0f, -1.0f}, {1.00005f, 0.0f, 1.0f},
+                      {0.99999f, -1.0f, -1.0f}, {0.99999f, 1.0f, -1.0f}, {0.99999f, 0.0f, 1.0f}};
+    mesh.triangles = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
+    scene.meshes.push_back(mesh);
+    scene.instances.push_back({0, AffineTransform::identity()});
+    const Ray ray{.org = {0.0f, 0.0f, 0.0f}, .dir = {1.0f, 0.0f, 0.0f}};
+    // The reference's grazing hit with barycentrics off by 0.05, as rounding leaves them there.
+    const Hit grazed{.t = 1.0f, .instance_id = 0, .prim_id = 0, .u = 0.45f, .v = 0.2f};
+    const Hit behind{.t = 1.00005f, .instance_id = 0, .prim_id = 1, .u = 0.25f, .v = 0.5f};
+    ASSERT_TRUE(fuzz::is_fragile_hit(scene, ray, grazed, {}));
+    ASSERT_FALSE(fuzz::is_fragile_hit(scene, ray, behind, {}));
+    const std::vector<Ray> rays = {ray};
+    const fuzz::AnswerComparison passed =
+        fuzz::compare_answers(scene, FixedAnswer(grazed), FixedAnswer(behind), rays);
+    EXPECT_EQ(passed.disagreement, "");
+    EXPECT_EQ(passed.excused_fragile, 1u);
+    // The other way round too: the structure reports the grazed triangle, the reference the
+    // one behind.
+    EXPECT_EQ(
+        fuzz::compare_answers(scene, FixedAnswer(behind), FixedAnswer(grazed), rays).disagreement,
+        "");
+    // A triangle in front that is not fragile, passed, stays a disagreement (its barycentrics
+    // off too, so that it is no tie either).
+    const Hit facing{.t = 0.99999f, .instance_id = 0, .prim_id = 2, .u = 0.35f, .v = 0.5f};
+    ASSERT_FALSE(fuzz::is_fragile_hit(scene, ray, facing, {}));
+    EXPECT_NE(
+        fuzz::compare_answers(scene, FixedAnswer(facing), FixedAnswer(behind), rays).disagreement,
+        "");
+}
+
 // Label `slow` (tests/CMakeLists.txt: suites named Slow*): about three minutes on two cores.
 TEST(SlowRandomizedScenes, ThousandsOfSmallScenesMatchEmbreeFlat) {
     expect_seeds_match_embree_flat(100000, 20000, {});
