@@ -228,6 +228,18 @@ const std::vector<VariantKey>& variant_keys() {
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"overlap-threshold", real_number(&Settings::overlap_threshold)},
         {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
+        {"rebuild-tree",
+         named_choice(&Settings::rebuild_tree,
+                      {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
+        {"top-collapse",
+         {[](const VariantValue& value, AccelOptions& options) {
+              options.rebraid.build.collapse =
+                  value.choice<NodeCollapse>(std::vector<std::pair<std::string_view, NodeCollapse>>{
+                      {"greedy", NodeCollapse::greedy}, {"optimal", NodeCollapse::optimal}});
+          },
+          [](const AccelOptions& a, const AccelOptions& b) {
+              return a.rebraid.build.collapse == b.rebraid.build.collapse;
+          }}},
         {"budget-search-min-use", real_number(&Settings::budget_search_min_use)},
         {"robust",
          {[](const VariantValue& value, AccelOptions& options) {

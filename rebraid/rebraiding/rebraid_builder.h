@@ -21,9 +21,10 @@ struct RebraidBuild {
 /// The re-braiding top-level builder (Benthin, Woop, Wald, Áfra, HPG 2017): a top-down
 /// binned-SAH build over BRefs that opens large BRefs into their object-BVH children while it
 /// partitions (§4.1), keeping all BRefs in one pre-allocated array of budgeted segments
-/// (§5.2). The result is traversed exactly like a plain two-level top (§5.5); the tree is the
-/// same for any thread count. One BRef per instance to start with, at its object root with the
-/// root's primitive count; instances of empty meshes are left out.
+/// (§5.2). Where anything opened, the tree is then built again over the final BRefs
+/// (RebraidSettings::rebuild_tree). The result is traversed exactly like a plain two-level top
+/// (§5.5); the tree is the same for any thread count. One BRef per instance to start with, at its
+/// object root with the root's primitive count; instances of empty meshes are left out.
 RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object_bvhs,
                            const RebraidSettings& settings = {});
 

@@ -65,6 +65,18 @@ std::vector<NamedSettings> settings_variants() {
              s.bounds_rule = BRefBoundsRule::transformed_children;
          })},
         {"default", {}},
+        {"tree-as-opened",
+         [] {
+             RebraidSettings settings;
+             settings.rebuild_tree = false;  // the tree grown while opening
+             return settings;
+         }()},
+        {"rebuilt-optimal",
+         [] {
+             RebraidSettings settings;
+             settings.build.collapse = NodeCollapse::optimal;
+             return settings;
+         }()},
         {"default-tables",
          [] {
              RebraidSettings settings;
