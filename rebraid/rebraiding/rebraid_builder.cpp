@@ -320,9 +320,9 @@ RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> obje
 /// Leaves reference the BRef array with its unused free space in between; renumber them into
 /// a dense item list (in array order) and fill the top level's items.
 /// `item_slots` receives each item's target slot and `item_weights` the primitives it stands
-/// for. The used slots are marked in a bitmap (one
-/// bit per slot of the array, which the budget can make several times the items) and counted
-/// per 64-bit word, so the pass reads the items, not the free space.
+/// for. The used slots are marked in a bitmap (one bit per slot of the array, which the budget
+/// can make several times the items) and counted per 64-bit word, so the pass reads the items,
+/// not the free space.
 void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
                 std::span<const BRefTarget> targets, std::vector<std::uint32_t>& item_slots,
                 std::vector<std::uint32_t>& item_weights, std::size_t parallel_threshold) {
