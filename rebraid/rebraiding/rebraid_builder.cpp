@@ -319,13 +319,13 @@ RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> obje
 
 /// Leaves reference the BRef array with its unused free space in between; renumber them into
 /// a dense item list (in array order) and fill the top level's items.
-/// `item_slots` receives each item's target slot and `item_weights` the primitives it stands
+/// `item_slots` receives each item's target slot and `item_primitives` the primitives it stands
 /// for. The used slots are marked in a bitmap (one bit per slot of the array, which the budget
 /// can make several times the items) and counted per 64-bit word, so the pass reads the items,
 /// not the free space.
 void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
                 std::span<const BRefTarget> targets, std::vector<std::uint32_t>& item_slots,
-                std::vector<std::uint32_t>& item_weights, std::size_t parallel_threshold) {
+                std::vector<std::uint32_t>& item_primitives, std::size_t parallel_threshold) {
     const std::size_t words = (prims.size() + 63) / 64;
     std::vector<std::uint64_t> used(words, 0);
     auto mark = [&](NodeRef ref) {
@@ -343,18 +343,18 @@ void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
     reserve_on_huge_pages(top.items, count);
     reserve_on_huge_pages(top.item_bounds, count);
     reserve_on_huge_pages(item_slots, count);
-    reserve_on_huge_pages(item_weights, count);
+    reserve_on_huge_pages(item_primitives, count);
     top.items.resize(count);
     top.item_bounds.resize(count);
     item_slots.resize(count);
-    item_weights.resize(count);
+    item_primitives.resize(count);
     auto fill = [&](std::size_t, std::size_t begin, std::size_t end) {
         for (std::size_t w = begin; w < end; ++w) {
             std::uint32_t item = word_start[w];
             for (std::uint64_t bits = used[w]; bits != 0; bits &= bits - 1, ++item) {
                 const BuildPrim& prim = prims[w * 64 + std::size_t(std::countr_zero(bits))];
                 item_slots[item] = prim.id;
-                item_weights[item] = prim.weight;
+                item_primitives[item] = prim.weight;
                 top.items[item] = targets[prim.id];
                 top.item_bounds[item] = prim.bounds;
             }
@@ -381,7 +381,7 @@ void emit_items(TopLevelBvh& top, std::span<const BuildPrim> prims,
 struct TrackedBuild {
     RebraidBuild build;
     double cost = 0.0;
-    std::vector<std::uint32_t> item_weights;  ///< primitives each item stands for
+    std::vector<std::uint32_t> item_primitives;  ///< primitives each item stands for
 };
 
 /// Whether a build needs its cost. The cost guard compares a build that opened something;
@@ -484,7 +484,7 @@ RebraidBuild build_rebraid(const Scene& scene, std::span<const ObjectBvh> object
     // built again (RebraidSettings::rebuild_tree). Where nothing opened, the tree grown is
     // already the plain build over the seeds.
     if (settings.rebuild_tree && result.build.opened > 0)
-        rebuild_top_tree(result.build.top, result.item_weights, settings.build);
+        rebuild_top_tree(result.build.top, result.item_primitives, settings.build);
     result.build.top.has_partial_leaves = settings.open_leaves;
     result.build.top.build_ms = timer.elapsed_ms();
     return std::move(result.build);
@@ -564,11 +564,11 @@ TrackedBuild build_rebraid_once(const RebraidInputs& inputs, const RebraidSettin
     if (n > 0) top.root = root.is_leaf ? policy.make_leaf(root) : grower.grow(root, top.nodes);
     // BRefs opened below a node after its box was written may reach past it by rounding.
     top.bounds.extend(fit_inner_boxes(top.nodes, top.root));
-    std::vector<std::uint32_t> item_slots, item_weights;
-    emit_items(top, prims, targets, item_slots, item_weights, settings.build.parallel_threshold);
+    std::vector<std::uint32_t> item_slots, item_primitives;
+    emit_items(top, prims, targets, item_slots, item_primitives, settings.build.parallel_threshold);
     result.brefs = top.items.size();
     result.opened = policy.opened();
-    TrackedBuild tracked{std::move(result), 0.0, std::move(item_weights)};
+    TrackedBuild tracked{std::move(result), 0.0, std::move(item_primitives)};
     const bool may_be_compared =
         tracked.build.opened > 0 ||
         double(tracked.build.brefs - n) >=

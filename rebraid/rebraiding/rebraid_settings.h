@@ -164,8 +164,9 @@ struct RebraidSettings {
     /// splits, and their children then reach across them. With the optimal cut (`build`), a
     /// diffuse ray's top-level node visits went from 15.8 to 11.1 on the generated powerplant
     /// and from 5.8 to 5.3 on brainstem (docs/design.md, "Building the tree again over the
-    /// final BRefs"), for one plain build over the kept BRefs (the budget search and the cost
-    /// guard compare the trees grown while opening).
+    /// final BRefs", which also has the BRefs' weights, rebuilt_tree_weight), for one plain
+    /// build over the kept BRefs (the budget search and the cost guard compare the trees
+    /// grown while opening).
     bool rebuild_tree = true;
     /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
     /// cover at least this fraction of its box (estimated on a grid over the segment).

@@ -58,7 +58,7 @@ TEST(TopTreeRebuild, KeepsEachItemWithItsBoxAndReachesEachOnce) {
         TopLevelBvh top = random_items(500, 11);
         const TopLevelBvh before = top;
         std::vector<std::uint32_t> weights;
-        for (std::uint32_t k = 0; k < 500; ++k) weights.push_back(1 + k % 7);
+        for (std::uint32_t k = 0; k < 500; ++k) weights.push_back(1 + (k * 37) % 3000);
         BuildSettings settings{.max_leaf_size = 1, .collapse = collapse};
         rebuild_top_tree(top, weights, settings);
         ASSERT_EQ(top.items.size(), before.items.size());
@@ -79,15 +79,28 @@ TEST(TopTreeRebuild, KeepsEachItemWithItsBoxAndReachesEachOnce) {
         std::vector<int> reached(top.items.size(), 0);
         collect_positions(top, top.root, top.bounds, reached);
         for (std::size_t p = 0; p < reached.size(); ++p) EXPECT_EQ(reached[p], 1) << p;
-        // The plain top builder over the same items, boxes and weights builds the same tree.
+        // The plain top builder over the same items and boxes, each weighted by
+        // rebuilt_tree_weight of its primitives, builds the same tree.
+        std::vector<std::uint32_t> tree_weights;
+        for (const std::uint32_t primitives : weights)
+            tree_weights.push_back(rebuilt_tree_weight(primitives));
         const TopLevelBvh plain =
-            build_top_level_over_items(before.items, before.item_bounds, weights, settings);
+            build_top_level_over_items(before.items, before.item_bounds, tree_weights, settings);
         ASSERT_EQ(plain.nodes.size(), top.nodes.size());
         EXPECT_EQ(
             std::memcmp(plain.nodes.data(), top.nodes.data(), top.nodes.size() * sizeof(WideNode)),
             0);
         EXPECT_EQ(plain.item_bounds, top.item_bounds);
     }
+}
+
+TEST(TopTreeRebuild, WeighsABRefByTheLogarithmOfItsPrimitives) {
+    static_assert(rebuilt_tree_weight(0) == 1 && rebuilt_tree_weight(1) == 1);
+    EXPECT_EQ(rebuilt_tree_weight(2), 2u);
+    EXPECT_EQ(rebuilt_tree_weight(3), 2u);
+    EXPECT_EQ(rebuilt_tree_weight(127), 7u);
+    EXPECT_EQ(rebuilt_tree_weight(128), 8u);
+    EXPECT_EQ(rebuilt_tree_weight(3'000'000), 22u);
 }
 
 TEST(TopTreeRebuild, RejectsPerItemArraysOfAnotherLength) {
