@@ -57,10 +57,10 @@ TEST(TopTreeRebuild, KeepsEachItemWithItsBoxAndReachesEachOnce) {
         SCOPED_TRACE(int(collapse));
         TopLevelBvh top = random_items(500, 11);
         const TopLevelBvh before = top;
-        std::vector<std::uint32_t> weights;
-        for (std::uint32_t k = 0; k < 500; ++k) weights.push_back(1 + (k * 37) % 3000);
+        std::vector<std::uint32_t> primitives;
+        for (std::uint32_t k = 0; k < 500; ++k) primitives.push_back(1 + (k * 37) % 3000);
         BuildSettings settings{.max_leaf_size = 1, .collapse = collapse};
-        rebuild_top_tree(top, weights, settings);
+        rebuild_top_tree(top, primitives, settings);
         ASSERT_EQ(top.items.size(), before.items.size());
         ASSERT_TRUE(top.root.is_inner());
         std::vector<int> moved_to(500, -1);
@@ -81,11 +81,10 @@ TEST(TopTreeRebuild, KeepsEachItemWithItsBoxAndReachesEachOnce) {
         for (std::size_t p = 0; p < reached.size(); ++p) EXPECT_EQ(reached[p], 1) << p;
         // The plain top builder over the same items and boxes, each weighted by
         // rebuilt_tree_weight of its primitives, builds the same tree.
-        std::vector<std::uint32_t> tree_weights;
-        for (const std::uint32_t primitives : weights)
-            tree_weights.push_back(rebuilt_tree_weight(primitives));
+        std::vector<std::uint32_t> weights;
+        for (const std::uint32_t count : primitives) weights.push_back(rebuilt_tree_weight(count));
         const TopLevelBvh plain =
-            build_top_level_over_items(before.items, before.item_bounds, tree_weights, settings);
+            build_top_level_over_items(before.items, before.item_bounds, weights, settings);
         ASSERT_EQ(plain.nodes.size(), top.nodes.size());
         EXPECT_EQ(
             std::memcmp(plain.nodes.data(), top.nodes.data(), top.nodes.size() * sizeof(WideNode)),
@@ -105,8 +104,8 @@ TEST(TopTreeRebuild, WeighsABRefByTheLogarithmOfItsPrimitives) {
 
 TEST(TopTreeRebuild, RejectsPerItemArraysOfAnotherLength) {
     TopLevelBvh top = random_items(10, 3);
-    const std::vector<std::uint32_t> weights(9, 1);
-    EXPECT_THROW(rebuild_top_tree(top, weights, {.max_leaf_size = 1}), Error);
+    const std::vector<std::uint32_t> primitives(9, 1);
+    EXPECT_THROW(rebuild_top_tree(top, primitives, {.max_leaf_size = 1}), Error);
 }
 
 TEST(TopTreeRebuild, ReBraidedTopsHoldTheSameItemsWithAndWithoutIt) {
