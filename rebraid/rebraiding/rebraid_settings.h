@@ -177,9 +177,9 @@ struct RebraidSettings {
     /// estimates, children's vertex bounds), and at 1,024 a top of a few hundred instances
     /// ran on one thread. The tree does not depend on it. The tree grown while opening fills
     /// its nodes greedily, as the plain top level's (default_top_level_settings()); `collapse`
-    /// chooses the cut of the rebuilt tree (rebuild_tree), optimal by default: over opened
-    /// BRefs it visited 2-4 % fewer nodes than the greedy cut and traced faster on every
-    /// scene that opens but fzk_haus (docs/design.md).
+    /// chooses the cut of the rebuilt tree (rebuild_tree) and of IncrementalTopLevel's upper
+    /// tree, optimal by default: over opened BRefs it visited 2-4 % fewer nodes than the
+    /// greedy cut and traced faster on every scene that opens but fzk_haus (docs/design.md).
     BuildSettings build{
         .max_leaf_size = 1, .task_threshold = 32, .collapse = NodeCollapse::optimal};
 
