@@ -371,11 +371,15 @@ TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
         const std::vector<ObjectBvh> bvhs = build_object_bvhs(c.scene, own_object_bvh_builder());
         for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
             SCOPED_TRACE(std::string(c.name) + " rule " + std::to_string(int(rule)));
+            // The search compares the trees grown while opening (the kept one alone is built
+            // again afterwards): the builds here keep those trees, so that their costs are the
+            // ones it compares.
             const RebraidSettings fixed{.budget_factor = c.budget_factor,
                                         .budget_doublings = 0,
                                         .budget_search_min_gain = 0.0f,
                                         .budget_search_min_use = 0.0f,
-                                        .opening_rule = rule};
+                                        .opening_rule = rule,
+                                        .rebuild_tree = false};
             RebraidSettings searching = fixed;
             searching.budget_doublings = 3;
             const RebraidBuild searched = build_rebraid(c.scene, bvhs, searching);
@@ -419,10 +423,12 @@ TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
     };
     for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
         SCOPED_TRACE(int(rule));
+        // The trees grown while opening, whose costs the search compares.
         const RebraidSettings base{.budget_factor = 1.0f,
                                    .budget_doublings = 0,
                                    .budget_search_min_use = 0.0f,
-                                   .opening_rule = rule};
+                                   .opening_rule = rule,
+                                   .rebuild_tree = false};
         const auto search = [&](std::uint32_t doublings, float min_gain) {
             RebraidSettings settings = base;
             settings.budget_doublings = doublings;
