@@ -71,10 +71,10 @@ std::vector<NamedSettings> settings_variants() {
              settings.rebuild_tree = false;  // the tree grown while opening
              return settings;
          }()},
-        {"rebuilt-optimal",
+        {"rebuilt-greedy",
          [] {
              RebraidSettings settings;
-             settings.build.collapse = NodeCollapse::optimal;
+             settings.build.collapse = NodeCollapse::greedy;  // the default cut is optimal
              return settings;
          }()},
         {"default-tables",
