@@ -231,6 +231,9 @@ const std::vector<VariantKey>& variant_keys() {
         {"rebuild-tree",
          named_choice(&Settings::rebuild_tree,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
+        {"merge-world",
+         named_choice(&Settings::merge_world_space,
+                      {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"top-collapse",
          {[](const VariantValue& value, AccelOptions& options) {
               options.rebraid.build.collapse =

@@ -39,6 +39,12 @@ enum class LeafVisits {
     /// leaves hold about 5 of up to 8 on the shared scenes), and the hits found shorten the
     /// ray before any inner sibling is entered.
     with_siblings,
+    /// Per node, as the visitor says: at an inner node `id` with leaf children the ray enters,
+    /// visit_leaf.takes_siblings(id) chooses with_siblings for them (handed over as
+    /// visit_leaf(id, refs, slots)) or one_by_one (each stacked and visited as
+    /// visit_leaf(NodeRef leaf)). For a tree whose nodes hold both kinds of leaves (a top level
+    /// with object nodes merged in: merged_top_level.h). The start must be an inner node.
+    by_node,
 };
 
 /// Asks the cache for the node `ref` names (all four lines of its 224 bytes).
@@ -57,8 +63,8 @@ struct NoLeafPrefetch {
 /// reference) for a ray prepared in the BVH's space. `visit_leaf` tests leaves' primitives
 /// (one leaf or several, see LeafVisits), shrinking prepared.ray.tfar on hits, and returns true to
 /// stop traversal (any-hit queries). Returns whether traversal was stopped by visit_leaf.
-/// `prefetch_leaf(NodeRef leaf)` is called for hit leaves that wait on the stack (only with
-/// LeafVisits::one_by_one), and every stacked inner node is prefetched: on scenes larger
+/// `prefetch_leaf(NodeRef leaf)` is called for hit leaves that wait on the stack (leaves
+/// visited one by one), and every stacked inner node is prefetched: on scenes larger
 /// than the caches, the misses of the siblings then overlap with the work on the nearest
 /// child instead of following it.
 template <TraversalOrder order = TraversalOrder::nearest_first,
@@ -68,6 +74,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                   TraversalCounters* counters, LeafVisitor&& visit_leaf,
                   LeafPrefetcher&& prefetch_leaf = {}) {
     constexpr bool kWithSiblings = leaf_visits == LeafVisits::with_siblings;
+    constexpr bool kByNode = leaf_visits == LeafVisits::by_node;
     if constexpr (kWithSiblings) {
         if (start.is_leaf()) return visit_leaf(&start, 1u);
     }
@@ -103,10 +110,18 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
             if (counters) ++counters->nodes_visited;
             alignas(32) float distances[kBvhWidth];
             unsigned mask = box_test(node, ray.tnear, ray.tfar, distances);
-            if constexpr (kWithSiblings) {
-                const unsigned leaf_mask = mask & leaf_slots(node);
+            if constexpr (kWithSiblings || kByNode) {
+                bool node_takes_siblings = true;
+                if constexpr (kByNode)
+                    node_takes_siblings = visit_leaf.takes_siblings(current.node_id());
+                const unsigned leaf_mask = node_takes_siblings ? mask & leaf_slots(node) : 0u;
                 if (leaf_mask != 0) {
-                    if (visit_leaf(node.children, leaf_mask)) return true;
+                    bool stop;
+                    if constexpr (kByNode)
+                        stop = visit_leaf(current.node_id(), node.children, leaf_mask);
+                    else
+                        stop = visit_leaf(node.children, leaf_mask);
+                    if (stop) return true;
                     // Their hits shortened the ray: keep the inner children still entered
                     // before its end (the test a stacked child gets when popped).
                     mask &= ~leaf_mask & entered_before(distances, ray.tfar);

@@ -21,7 +21,8 @@ InstancedAccel build_rebraid_accel(const Scene& scene, const ObjectBvhBuilder& o
     info.brefs = build.brefs;
     info.budget = build.budget;
     info.opened = build.opened;
-    return InstancedAccel(scene, std::move(object_bvhs), std::move(build.top), info);
+    return InstancedAccel(scene, std::move(object_bvhs), std::move(build.top), info,
+                          settings.merge_world_space);
 }
 
 }  // namespace rebraid

@@ -168,6 +168,9 @@ struct RebraidSettings {
     /// build over the kept BRefs (the budget search and the cost guard compare the trees
     /// grown while opening).
     bool rebuild_tree = true;
+    /// Merge the object subtrees that world-space BRefs name into the traced top level
+    /// (MergedTopLevel): rays reach them without entering their instances.
+    bool merge_world_space = true;
     /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
     /// cover at least this fraction of its box (estimated on a grid over the segment).
     float overlap_threshold = 0.25f;

@@ -71,12 +71,12 @@ void share_object_spaces(std::vector<InstanceTarget>& targets) {
 }  // namespace
 
 InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs,
-                               TopLevelBvh top, const AccelStats& build_info)
+                               TopLevelBvh top, const AccelStats& build_info,
+                               bool merge_world_space)
     : object_bvhs_(std::move(object_bvhs)),
       top_(std::move(top)),
       build_info_(build_info),
       simd_level_(default_simd_level()) {
-    use_kernels(simd_level_, triangle_test_);
     // The instance records count as top-level build time: a frame that moves instances makes
     // them again (a million instances: hundreds of milliseconds).
     const BuildTimer timer;
@@ -111,6 +111,10 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
         }
     });
     share_object_spaces(instance_targets_);
+    // Part of the top level's build time too: it is made again with every top level.
+    if (merge_world_space)
+        merged_ = merge_world_space_items(top_, instance_targets_, object_views_);
+    use_kernels(simd_level_, triangle_test_);
     const double records_ms = timer.elapsed_ms();
     build_info_.build_ms += records_ms;
     build_info_.top_build_ms = build_info_.top_build_ms.value_or(0.0) + records_ms;
@@ -131,10 +135,19 @@ void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
     const TraceKernels& kernels = trace_kernels(level, test);
     // A top level of one item: no top-level traversal to run (TraceKernels::sole_item_*).
     const bool is_sole_item = top_.root.is_leaf() && top_.root.prim_count() == 1;
-    intersect_ = is_sole_item ? kernels.sole_item_intersect : kernels.instanced_intersect;
-    occluded_ = is_sole_item ? kernels.sole_item_occluded : kernels.instanced_occluded;
-    intersect_located_ =
-        is_sole_item ? kernels.sole_item_intersect_located : kernels.instanced_intersect_located;
+    if (is_sole_item) {
+        intersect_ = kernels.sole_item_intersect;
+        occluded_ = kernels.sole_item_occluded;
+        intersect_located_ = kernels.sole_item_intersect_located;
+    } else if (!merged_.empty()) {
+        intersect_ = kernels.merged_intersect;
+        occluded_ = kernels.merged_occluded;
+        intersect_located_ = kernels.merged_intersect_located;
+    } else {
+        intersect_ = kernels.instanced_intersect;
+        occluded_ = kernels.instanced_occluded;
+        intersect_located_ = kernels.instanced_intersect_located;
+    }
 }
 
 void InstancedAccel::set_simd_level(SimdLevel level) {
@@ -179,7 +192,7 @@ AccelStats InstancedAccel::stats() const {
     }
     memory += object_to_world_.size() * sizeof(AffineTransform) +
               instance_targets_.size() * sizeof(InstanceTarget) +
-              object_views_.size() * sizeof(ObjectBvhView);
+              object_views_.size() * sizeof(ObjectBvhView) + merged_.memory_bytes();
     stats.nodes = nodes;
     stats.leaves = leaves;
     stats.memory_bytes = memory;

@@ -14,6 +14,7 @@
 #include "rebraid/core/triangle_test.h"
 #include "rebraid/top_level/instance_target.h"
 #include "rebraid/top_level/located_hit.h"
+#include "rebraid/top_level/merged_top_level.h"
 #include "rebraid/top_level/top_level_bvh.h"
 #include "rebraid/top_level/trace_kernels.h"
 #include "rebraid/top_level/two_level_builder.h"
@@ -28,8 +29,10 @@ class InstancedAccel final : public Accel {
 public:
     /// `build_info` carries the build timings and builder-specific figures (BRefs, budget)
     /// for stats(); the rest of the statistics are computed from the structure.
+    /// `merge_world_space`: copy the object subtrees that the top level's world-space items
+    /// name into the traced tree (MergedTopLevel).
     InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs, TopLevelBvh top,
-                   const AccelStats& build_info);
+                   const AccelStats& build_info, bool merge_world_space = false);
     // Movable, not copyable: object_views() point into the object BVHs' arrays, which a
     // move carries along and a copy would not.
     InstancedAccel(InstancedAccel&&) = default;
@@ -63,6 +66,9 @@ public:
     const std::vector<InstanceTarget>& instance_targets() const { return instance_targets_; }
     /// The arrays traversal reads of each mesh's object BVH (index = MeshId).
     const std::vector<ObjectBvhView>& object_views() const { return object_views_; }
+    /// The top level with its world-space items' object nodes copied in, which queries
+    /// traverse instead of the top level when it is not empty (merged_top_level.h).
+    const MergedTopLevel& merged_top_level() const { return merged_; }
 
     /// Replaces the world-to-object map of every instance not placed by the identity with
     /// `world_to_object[i]` (index = InstanceId; each an inverse of the instance's
@@ -91,6 +97,7 @@ private:
     std::vector<AffineTransform> object_to_world_;
     std::vector<InstanceTarget> instance_targets_;
     std::vector<ObjectBvhView> object_views_;
+    MergedTopLevel merged_;
     AccelStats build_info_;
     SimdLevel simd_level_;
     TriangleTest triangle_test_ = TriangleTest::moller;

@@ -14,6 +14,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #if defined(__x86_64__)
@@ -31,5 +32,6 @@
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instance_target.h"
 #include "rebraid/top_level/instanced_accel.h"
+#include "rebraid/top_level/merged_top_level.h"
 #include "rebraid/top_level/top_level_bvh.h"
 #include "rebraid/top_level/trace_kernels.h"

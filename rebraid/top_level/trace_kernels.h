@@ -30,6 +30,13 @@ struct TraceKernels {
     bool (*sole_item_occluded)(const InstancedAccel& accel, const Ray& ray);
     LocatedHit (*sole_item_intersect_located)(const InstancedAccel& accel, const Ray& ray,
                                               const CloserHitObserver* observer);
+    /// The three instanced queries for a top level with world-space items merged in
+    /// (MergedTopLevel): one traversal through the top level and those items' object nodes.
+    Hit (*merged_intersect)(const InstancedAccel& accel, const Ray& ray,
+                            TraversalCounters* counters);
+    bool (*merged_occluded)(const InstancedAccel& accel, const Ray& ray);
+    LocatedHit (*merged_intersect_located)(const InstancedAccel& accel, const Ray& ray,
+                                           const CloserHitObserver* observer);
 };
 
 /// The kernels of `level` with the triangle test `test`. Throws rebraid::Error when this build

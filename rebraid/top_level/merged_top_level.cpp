@@ -1,0 +1,122 @@
+#include "rebraid/top_level/merged_top_level.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "rebraid/core/huge_pages.h"
+
+namespace rebraid {
+namespace {
+
+/// A top-level slot whose item is merged: the node and slot, and the item.
+struct MergedSlot {
+    std::uint32_t node = 0;
+    int slot = 0;
+    const TopLevelItem* item = nullptr;
+};
+
+/// The item a top-level leaf holds, when it can hang in the tree: one item naming an inner
+/// object node of an instance placed by the identity.
+const TopLevelItem* mergeable_item(const TopLevelBvh& top, std::span<const InstanceTarget> targets,
+                                   NodeRef leaf) {
+    if (!leaf.is_leaf() || leaf.prim_count() != 1) return nullptr;
+    const TopLevelItem& item = top.items[leaf.first_prim()];
+    if (targets[item.instance_id].space != InstanceTarget::kWorldSpace) return nullptr;
+    return item.object_node.is_inner() ? &item : nullptr;
+}
+
+/// Inner nodes of `bvh` in the subtree below `start`.
+std::uint32_t count_inner_nodes(const ObjectBvhView& bvh, NodeRef start) {
+    std::uint32_t count = 0;
+    std::vector<NodeRef> pending{start};
+    while (!pending.empty()) {
+        const NodeRef ref = pending.back();
+        pending.pop_back();
+        ++count;
+        for (const NodeRef child : bvh.nodes[ref.node_id()].children)
+            if (child.is_inner()) pending.push_back(child);
+    }
+    return count;
+}
+
+/// Copies the subtree below `start` of `bvh` into merged.nodes from id `first` on (in the
+/// order a depth-first walk in slot order reaches its nodes), its nodes taking `source`.
+void copy_subtree(MergedTopLevel& merged, const ObjectBvhView& bvh, std::uint32_t source,
+                  NodeRef start, std::uint32_t first) {
+    std::uint32_t next = first;
+    const auto place = [&](NodeRef object_ref) {
+        const std::uint32_t id = next++;
+        merged.nodes[id] = bvh.nodes[object_ref.node_id()];
+        merged.node_sources[id - merged.first_object_node] = source;
+        return id;
+    };
+    // Copied nodes whose inner children still name object nodes.
+    std::vector<std::uint32_t> pending{place(start)};
+    while (!pending.empty()) {
+        const std::uint32_t id = pending.back();
+        pending.pop_back();
+        for (NodeRef& child : merged.nodes[id].children) {
+            if (!child.is_inner()) continue;
+            const std::uint32_t copy = place(child);
+            child = NodeRef::inner(copy);
+            pending.push_back(copy);
+        }
+    }
+}
+
+}  // namespace
+
+MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
+                                       std::span<const InstanceTarget> targets,
+                                       std::span<const ObjectBvhView> views) {
+    MergedTopLevel merged;
+    if (!top.root.is_inner()) return merged;
+    std::vector<MergedSlot> slots;
+    for (std::uint32_t n = 0; n < top.nodes.size(); ++n)
+        for (int slot = 0; slot < kBvhWidth; ++slot)
+            if (const TopLevelItem* item =
+                    mergeable_item(top, targets, top.nodes[n].children[slot]))
+                slots.push_back({n, slot, item});
+    // Merged where most items can be: the merged loop costs every node a little more (the
+    // choice of leaf visit, each object leaf's source), which the entries saved repay only
+    // when they are most of them (MergedTopLevel).
+    if (slots.empty() || 2 * slots.size() < top.items.size()) return merged;
+
+    const auto bvh_of = [&](const MergedSlot& slot) -> const ObjectBvhView& {
+        return views[targets[slot.item->instance_id].mesh];
+    };
+    // Each subtree's place in the copy, then the copies in parallel: sized once, as growing
+    // the copy node by node moved and faulted it in again at every doubling (powerplant's
+    // 109,000 object nodes took 200 ms that way).
+    std::vector<std::uint32_t> first_node(slots.size() + 1);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+            first_node[i + 1] = count_inner_nodes(bvh_of(slots[i]), slots[i].item->object_node);
+    });
+    first_node[0] = std::uint32_t(top.nodes.size());
+    for (std::size_t i = 0; i < slots.size(); ++i) first_node[i + 1] += first_node[i];
+
+    merged.first_object_node = std::uint32_t(top.nodes.size());
+    reserve_on_huge_pages(merged.nodes, first_node.back());
+    merged.nodes.assign(top.nodes.begin(), top.nodes.end());
+    merged.nodes.resize(first_node.back());
+    reserve_on_huge_pages(merged.node_sources, first_node.back() - merged.first_object_node);
+    merged.node_sources.resize(first_node.back() - merged.first_object_node);
+    merged.sources.resize(slots.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const MergedSlot& slot = slots[i];
+            const ObjectBvhView& bvh = bvh_of(slot);
+            merged.sources[i] = {bvh.leaf_rows, bvh.triangles, bvh.prim_ids,
+                                 slot.item->instance_id};
+            copy_subtree(merged, bvh, std::uint32_t(i), slot.item->object_node, first_node[i]);
+            merged.nodes[slot.node].children[slot.slot] = NodeRef::inner(first_node[i]);
+        }
+    });
+    for (const MergedLeafSource& source : merged.sources)
+        merged.every_source_has_rows = merged.every_source_has_rows && source.leaf_rows != nullptr;
+    merged.root = top.root;
+    return merged;
+}
+
+}  // namespace rebraid

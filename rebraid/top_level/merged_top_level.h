@@ -1,0 +1,74 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/wide_node.h"
+#include "rebraid/core/triangle.h"
+#include "rebraid/core/types.h"
+#include "rebraid/top_level/instance_target.h"
+#include "rebraid/top_level/top_level_bvh.h"
+
+namespace rebraid {
+
+/// Where the triangles of one merged subtree's leaves are (its object BVH's arrays).
+struct MergedLeafSource {
+    const float* leaf_rows = nullptr;          ///< ObjectBvhView::leaf_rows
+    const TriangleVerts* triangles = nullptr;  ///< ObjectBvhView::triangles
+    const PrimId* prim_ids = nullptr;          ///< ObjectBvhView::prim_ids
+    InstanceId instance = 0;
+};
+
+/// A top level with the object nodes of its world-space items copied in: one tree that a ray
+/// traverses without entering those instances. An item of an instance placed by the identity
+/// (an object built in world space, the paper's common case, §3) needs no ray of its own, so
+/// the object subtree it names can hang below the top-level node that held the item, as a
+/// subtree of a flat BVH would: the ray reaches those object nodes and leaves in the same loop
+/// and with the same stack as the top level's nodes, and entering no longer chains the item,
+/// its instance's record and its mesh's arrays before the first object node can be fetched.
+/// Items of placed instances and items that name object leaves stay leaves of the top level,
+/// entered as before (traverse_bvh's LeafVisits::by_node visits the two kinds).
+///
+/// The copy holds the top level's nodes (same numbers) followed by each merged subtree's
+/// nodes; a copied object node keeps its leaf references, which still name triangles in its
+/// mesh's leaf order, and its subtree's source says where those are. The top level itself
+/// (TopLevelBvh) is unchanged: statistics and structure hashes read it.
+struct MergedTopLevel {
+    std::vector<WideNode> nodes;
+    /// Nodes from this id on are copied object nodes; below it, the top level's own, whose
+    /// leaves are top-level items.
+    std::uint32_t first_object_node = 0;
+    /// Per copied object node (index = id - first_object_node): its subtree's source.
+    std::vector<std::uint32_t> node_sources;
+    std::vector<MergedLeafSource> sources;
+    /// Every source has pre-arranged rows: the SIMD kernels read rows only (one loop).
+    bool every_source_has_rows = true;
+    /// The top level's root; empty when nothing was merged (traversal takes the top level).
+    NodeRef root = NodeRef::empty();
+
+    bool empty() const { return root.is_empty(); }
+    bool is_object_node(std::uint32_t node_id) const { return node_id >= first_object_node; }
+    const MergedLeafSource& source_of(std::uint32_t node_id) const {
+        return sources[node_sources[node_id - first_object_node]];
+    }
+    std::uint64_t memory_bytes() const {
+        return nodes.size() * sizeof(WideNode) + node_sources.size() * sizeof(std::uint32_t) +
+               sources.size() * sizeof(MergedLeafSource);
+    }
+};
+
+/// The merge of `top`'s world-space items that name inner object nodes (items whose
+/// instance's target is InstanceTarget::kWorldSpace, views[target.mesh] their BVH; only
+/// top-level leaves of one item, the top builders' leaves), when they are at least half of
+/// its items; an empty MergedTopLevel otherwise and for a top level whose root is a leaf.
+/// The merged traversal costs every node a little more (the choice of leaf visit, the source
+/// of each object leaf), which the entries saved repay only where they are most of them
+/// (docs/design.md, "Entering an instance"). Deterministic: subtrees are placed in the top
+/// level's node and slot order, whatever the thread count.
+MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
+                                       std::span<const InstanceTarget> targets,
+                                       std::span<const ObjectBvhView> views);
+
+}  // namespace rebraid

@@ -1,0 +1,176 @@
+// The merge of world-space items into the traced top level (merged_top_level.h): where each
+// subtree hangs and what it holds, when it is made, and that rays find what they found by
+// entering the items. Its hits against Embree's flat scene are checked in
+// accel_equivalence_test.cpp ("objects in world space", merged as the first test here shows).
+#include "rebraid/top_level/merged_top_level.h"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "rebraid/core/simd_level.h"
+#include "rebraid/core/structure_hash.h"
+#include "rebraid/generators/world_space_objects.h"
+#include "rebraid/rebraiding/rebraid_accel.h"
+#include "rebraid/rebraiding/rebraid_settings.h"
+#include "rebraid/top_level/instanced_accel.h"
+#include "support/test_rays.h"
+#include "support/test_scenes.h"
+#include "support/thread_count_hash.h"
+
+namespace rebraid {
+namespace {
+
+Scene world_space_scene() {
+    return bake_instances_into_world_space(test::make_overlap_scene(24, 5));
+}
+
+InstancedAccel rebraided(const Scene& scene, bool merge) {
+    RebraidSettings settings;
+    settings.merge_world_space = merge;
+    return build_rebraid_accel(scene, own_object_bvh_builder(), settings);
+}
+
+/// Child `slot`'s box in `a` and `b` have the same bits.
+bool same_child_box(const WideNode& a, const WideNode& b, int slot) {
+    const BBox3f box_a = a.child_bounds(slot), box_b = b.child_bounds(slot);
+    return std::memcmp(&box_a, &box_b, sizeof(BBox3f)) == 0;
+}
+
+/// Checks that the copy below `copy` is the object subtree below `original` node for node
+/// (same boxes, same leaves, inner children copied), each copied node taking `source` and
+/// reached once (`reached`, indexed by merged node id).
+void expect_same_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
+                         std::uint32_t source, NodeRef original, NodeRef copy,
+                         std::vector<int>& reached) {
+    ASSERT_TRUE(copy.is_inner());
+    ASSERT_TRUE(merged.is_object_node(copy.node_id()));
+    ++reached[copy.node_id()];
+    EXPECT_EQ(merged.node_sources[copy.node_id() - merged.first_object_node], source);
+    const WideNode& a = bvh.nodes[original.node_id()];
+    const WideNode& b = merged.nodes[copy.node_id()];
+    for (int slot = 0; slot < kBvhWidth; ++slot) {
+        const NodeRef child = a.children[slot];
+        EXPECT_TRUE(same_child_box(a, b, slot));
+        if (child.is_inner())
+            expect_same_subtree(merged, bvh, source, child, b.children[slot], reached);
+        else
+            EXPECT_EQ(child, b.children[slot]);
+    }
+}
+
+TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeWhereTheItemWas) {
+    const Scene scene = world_space_scene();
+    const InstancedAccel accel = rebraided(scene, true);
+    const TopLevelBvh& top = accel.top_level();
+    const MergedTopLevel& merged = accel.merged_top_level();
+    ASSERT_FALSE(merged.empty());
+    EXPECT_EQ(merged.root, top.root);
+    ASSERT_EQ(merged.first_object_node, top.nodes.size());
+    ASSERT_EQ(merged.node_sources.size(), merged.nodes.size() - top.nodes.size());
+    std::vector<int> reached(merged.nodes.size(), 0);
+    std::size_t merged_items = 0, kept_items = 0;
+    for (std::uint32_t n = 0; n < top.nodes.size(); ++n) {
+        for (int slot = 0; slot < kBvhWidth; ++slot) {
+            const NodeRef child = top.nodes[n].children[slot];
+            const NodeRef copy = merged.nodes[n].children[slot];
+            EXPECT_TRUE(same_child_box(top.nodes[n], merged.nodes[n], slot));
+            if (!child.is_leaf() || copy == child) {
+                EXPECT_EQ(copy, child);
+                if (child.is_leaf()) ++kept_items;
+                continue;
+            }
+            // A merged slot: a world-space item naming an inner object node.
+            ASSERT_EQ(child.prim_count(), 1u);
+            const TopLevelItem& item = top.items[child.first_prim()];
+            const InstanceTarget& target = accel.instance_targets()[item.instance_id];
+            EXPECT_EQ(target.space, InstanceTarget::kWorldSpace);
+            ASSERT_TRUE(item.object_node.is_inner());
+            const std::uint32_t source =
+                merged.node_sources[copy.node_id() - merged.first_object_node];
+            ASSERT_LT(source, merged.sources.size());
+            const ObjectBvhView& bvh = accel.object_views()[target.mesh];
+            EXPECT_EQ(merged.sources[source].instance, item.instance_id);
+            EXPECT_EQ(merged.sources[source].leaf_rows, bvh.leaf_rows);
+            EXPECT_EQ(merged.sources[source].triangles, bvh.triangles);
+            EXPECT_EQ(merged.sources[source].prim_ids, bvh.prim_ids);
+            expect_same_subtree(merged, bvh, source, item.object_node, copy, reached);
+            ++merged_items;
+        }
+    }
+    EXPECT_EQ(merged_items, merged.sources.size());
+    EXPECT_EQ(merged_items + kept_items, top.items.size());
+    // Every copied node below exactly one merged slot, the top level's own below none.
+    for (std::size_t id = 0; id < reached.size(); ++id)
+        EXPECT_EQ(reached[id], merged.is_object_node(std::uint32_t(id)) ? 1 : 0) << id;
+}
+
+TEST(MergedTopLevel, MergesOnlyWhereMostItemsAreInWorldSpace) {
+    Scene mixed = test::make_overlap_scene(24, 5);
+    for (std::size_t i = 0; i < mixed.instances.size(); i += 3)
+        mixed.instances[i].object_to_world = AffineTransform::identity();
+    EXPECT_TRUE(rebraided(mixed, true).merged_top_level().empty());
+    EXPECT_TRUE(rebraided(test::make_overlap_scene(24, 5), true).merged_top_level().empty());
+    EXPECT_FALSE(rebraided(world_space_scene(), true).merged_top_level().empty());
+    EXPECT_TRUE(rebraided(world_space_scene(), false).merged_top_level().empty());
+}
+
+TEST(MergedTopLevel, RaysFindWhatEnteringTheItemsFinds) {
+    const Scene scene = world_space_scene();
+    InstancedAccel merged = rebraided(scene, true);
+    InstancedAccel entered = rebraided(scene, false);
+    ASSERT_FALSE(merged.merged_top_level().empty());
+    const std::vector<Ray> rays = test::varied_rays(entered, scene.bounds(), 10000, 7);
+    for (const TriangleTest test : {TriangleTest::moller, TriangleTest::watertight}) {
+        for (const SimdLevel level : runnable_simd_levels()) {
+            SCOPED_TRACE(std::string(simd_level_name(level)) + " / " +
+                         std::string(triangle_test_name(test)));
+            for (InstancedAccel* accel : {&merged, &entered}) {
+                accel->set_simd_level(level);
+                accel->set_triangle_test(test);
+            }
+            std::size_t hits = 0, differing = 0, other_triangle = 0;
+            for (const Ray& ray : rays) {
+                // The same world ray meets the same triangles with the same arithmetic: the
+                // same t to the bit and the same occlusion. Two triangles hit at the same t (a
+                // shared edge) may be found in another order: a tie either may win.
+                const LocatedHit a = merged.intersect_located(ray);
+                const LocatedHit b = entered.intersect_located(ray);
+                hits += a.hit.is_hit();
+                const bool same = std::bit_cast<std::uint32_t>(a.hit.t) ==
+                                      std::bit_cast<std::uint32_t>(b.hit.t) &&
+                                  merged.occluded(ray) == entered.occluded(ray);
+                if (!same && differing++ < 5) ADD_FAILURE() << "t " << a.hit.t << " / " << b.hit.t;
+                const bool same_triangle = a.hit.instance_id == b.hit.instance_id &&
+                                           a.hit.prim_id == b.hit.prim_id &&
+                                           a.triangle.leaf_position == b.triangle.leaf_position;
+                other_triangle += !same_triangle;
+                const Hit plain = merged.intersect(ray);
+                EXPECT_EQ(plain.instance_id, a.hit.instance_id);
+                EXPECT_EQ(plain.prim_id, a.hit.prim_id);
+            }
+            EXPECT_LE(other_triangle, hits / 100);
+            EXPECT_EQ(differing, 0u);
+            EXPECT_GT(hits, rays.size() / 50);  // the comparison is not one of misses
+        }
+    }
+}
+
+TEST(MergedTopLevel, SameCopyOnAnyThreadCount) {
+    const Scene scene = world_space_scene();
+    test::expect_same_hash_on_threads({1, 2, 8}, [&] {
+        const InstancedAccel accel = rebraided(scene, true);
+        const MergedTopLevel& merged = accel.merged_top_level();
+        StructureHash hash;
+        hash.add<WideNode>(merged.nodes);
+        hash.add<std::uint32_t>(merged.node_sources);
+        for (const MergedLeafSource& source : merged.sources) hash.add_value(source.instance);
+        return hash.value();
+    });
+}
+
+}  // namespace
+}  // namespace rebraid
