@@ -24,7 +24,9 @@ namespace rebraid {
 /// A two-level structure: object BVHs per mesh plus a top level whose leaves reference
 /// (instance, object node) pairs. Serves both the plain two-level top and the re-braided one:
 /// the same traversal runs on both (paper §5.5). A ray entering a leaf item is mapped into
-/// the instance's object space once per item and continues at the item's object node.
+/// the instance's object space once per item and continues at the item's object node; a top
+/// level whose items are mostly in world space may be traced with their object subtrees
+/// merged in instead (merged_top_level.h).
 class InstancedAccel final : public Accel {
 public:
     /// `build_info` carries the build timings and builder-specific figures (BRefs, budget)
