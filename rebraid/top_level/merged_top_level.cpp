@@ -94,7 +94,14 @@ MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
             first_node[i + 1] = count_inner_nodes(bvh_of(slots[i]), slots[i].item->object_node);
     });
     first_node[0] = std::uint32_t(top.nodes.size());
-    for (std::size_t i = 0; i < slots.size(); ++i) first_node[i + 1] += first_node[i];
+    std::uint64_t node_count = first_node[0];
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+        node_count += first_node[i + 1];
+        // Inner references name nodes below NodeRef::kEmptyBits: a larger copy is not made
+        // (the items are then entered as before).
+        if (node_count >= NodeRef::kEmptyBits) return merged;
+        first_node[i + 1] = std::uint32_t(node_count);
+    }
 
     merged.first_object_node = std::uint32_t(top.nodes.size());
     reserve_on_huge_pages(merged.nodes, first_node.back());

@@ -23,7 +23,7 @@ struct MergedLeafSource {
 
 /// A top level with the object nodes of its world-space items copied in: one tree that a ray
 /// traverses without entering those instances. An item of an instance placed by the identity
-/// (an object built in world space, the paper's common case, §3) needs no ray of its own, so
+/// (an object built in world space, the paper's common case, §3.1) needs no ray of its own, so
 /// the object subtree it names can hang below the top-level node that held the item, as a
 /// subtree of a flat BVH would: the ray reaches those object nodes and leaves in the same loop
 /// and with the same stack as the top level's nodes, and entering no longer chains the item,
@@ -62,7 +62,8 @@ struct MergedTopLevel {
 /// The merge of `top`'s world-space items that name inner object nodes (items whose
 /// instance's target is InstanceTarget::kWorldSpace, views[target.mesh] their BVH; only
 /// top-level leaves of one item, the top builders' leaves), when they are at least half of
-/// its items; an empty MergedTopLevel otherwise and for a top level whose root is a leaf.
+/// its items; an empty MergedTopLevel otherwise, for a top level whose root is a leaf, and
+/// where the copy would hold more nodes than a NodeRef can name.
 /// The merged traversal costs every node a little more (the choice of leaf visit, the source
 /// of each object leaf), which the entries saved repay only where they are most of them
 /// (docs/design.md, "Entering an instance"). Deterministic: subtrees are placed in the top
