@@ -35,51 +35,6 @@ RTCBuildQuality to_embree_quality(EmbreeBuildQuality quality) {
     throw Error("EmbreeBuildQuality: unknown value " + std::to_string(static_cast<int>(quality)));
 }
 
-RTCRay to_embree_ray(const Ray& ray) {
-    RTCRay out{};
-    out.org_x = ray.org.x;
-    out.org_y = ray.org.y;
-    out.org_z = ray.org.z;
-    out.tnear = ray.tnear;
-    out.dir_x = ray.dir.x;
-    out.dir_y = ray.dir.y;
-    out.dir_z = ray.dir.z;
-    out.time = 0.0f;
-    out.tfar = ray.tfar;
-    out.mask = std::numeric_limits<unsigned int>::max();  // every geometry is visible
-    out.id = 0;
-    out.flags = 0;
-    return out;
-}
-
-Hit embree_closest_hit(RTCScene scene, const Ray& ray, bool instance_id_is_inst_id) {
-    RTCRayHit rayhit{};
-    rayhit.ray = to_embree_ray(ray);
-    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcIntersect1(scene, &context, &rayhit);
-    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
-    Hit hit;
-    hit.t = rayhit.ray.tfar;
-    hit.instance_id = instance_id_is_inst_id ? rayhit.hit.instID[0] : rayhit.hit.geomID;
-    hit.prim_id = rayhit.hit.primID;
-    hit.u = rayhit.hit.u;
-    hit.v = rayhit.hit.v;
-    return hit;
-}
-
-bool embree_is_occluded(RTCScene scene, const Ray& ray) {
-    RTCRay embree_ray = to_embree_ray(ray);
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcOccluded1(scene, &context, &embree_ray);
-    // Embree marks an occluded ray by setting tfar to -inf.
-    return embree_ray.tfar == -std::numeric_limits<float>::infinity();
-}
-
 void write_vertices(RTCGeometry geometry, const Mesh& mesh, const AffineTransform* to_world) {
     auto* vertices =
         static_cast<Vec3f*>(rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0));
