@@ -112,6 +112,10 @@ void EmbreeAccelSettings::validate() const {
     own_builder.validate();
     embree_builder.validate();
     rebraid.validate();
+    if (rebraid.world_space_single_instances)
+        throw Error(
+            "EmbreeAccelSettings: rebraid.world_space_single_instances is not "
+            "supported: the drop-in traces each mesh in its object space, as Embree does");
     object_update.validate();
 }
 

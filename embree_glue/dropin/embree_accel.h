@@ -32,8 +32,15 @@ struct EmbreeAccelSettings {
     BuildSettings own_builder{};
     /// rtcBuildBVH, when `object_builder` is embree.
     glue::EmbreeBvhBuilderSettings embree_builder{};
-    /// The re-braided top level.
-    RebraidSettings rebraid{};
+    /// The re-braided top level. Every mesh keeps its object space
+    /// (world_space_single_instances off; validate() rejects it on): Embree computes an
+    /// instance's hits there, which the drop-in reproduces bit for bit, and update() keeps
+    /// object BVHs while instances move.
+    RebraidSettings rebraid = [] {
+        RebraidSettings settings;
+        settings.world_space_single_instances = false;
+        return settings;
+    }();
     /// How update() brings the object BVHs of deformed meshes up to date (refit, rotations,
     /// restructuring, rebuild, or automatic: refit until the SAH degrades, then rebuild).
     ObjectBvhUpdateSettings object_update{};

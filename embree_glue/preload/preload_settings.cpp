@@ -22,7 +22,10 @@ bool read_switch(const EnvironmentReader& environment, const std::string& name, 
 EmbreeAccelSettings accel_settings(const std::string& spec) {
     const cli::AccelVariant variant = [&] {
         try {
-            return cli::parse_accel_variant(spec);
+            // On top of EmbreeAccel's defaults (object spaces kept), not the command's.
+            cli::AccelOptions base;
+            base.rebraid = EmbreeAccelSettings{}.rebraid;
+            return cli::parse_accel_variant(spec, base);
         } catch (const Error& error) {
             throw Error(std::string("REBRAID_ACCEL=") + spec + ": " + error.what());
         }

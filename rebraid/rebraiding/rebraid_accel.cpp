@@ -1,10 +1,12 @@
 #include "rebraid/rebraiding/rebraid_accel.h"
 
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "rebraid/core/build_timer.h"
 #include "rebraid/rebraiding/rebraid_builder.h"
+#include "rebraid/rebraiding/world_space_single_instances.h"
 
 namespace rebraid {
 
@@ -13,15 +15,19 @@ InstancedAccel build_rebraid_accel(const Scene& scene, const ObjectBvhBuilder& o
     scene.validate();
     settings.validate();
     const BuildTimer timer;
-    std::vector<ObjectBvh> object_bvhs = build_object_bvhs(scene, object_builder);
-    RebraidBuild build = build_rebraid(scene, object_bvhs, settings);
+    const std::optional<Scene> world_space = settings.world_space_single_instances
+                                                 ? single_instances_in_world_space(scene)
+                                                 : std::nullopt;
+    const Scene& built = world_space ? *world_space : scene;
+    std::vector<ObjectBvh> object_bvhs = build_object_bvhs(built, object_builder);
+    RebraidBuild build = build_rebraid(built, object_bvhs, settings);
     AccelStats info;
     info.build_ms = timer.elapsed_ms();
     info.top_build_ms = build.top.build_ms;
     info.brefs = build.brefs;
     info.budget = build.budget;
     info.opened = build.opened;
-    return InstancedAccel(scene, std::move(object_bvhs), std::move(build.top), info,
+    return InstancedAccel(built, std::move(object_bvhs), std::move(build.top), info,
                           settings.merge_world_space);
 }
 

@@ -168,6 +168,12 @@ struct RebraidSettings {
     /// build over the kept BRefs (the budget search and the cost guard compare the trees
     /// grown while opening).
     bool rebuild_tree = true;
+    /// Build each mesh that exactly one instance places in world space
+    /// (single_instances_in_world_space): rays reach it without being mapped, and a top of
+    /// mostly such objects is merged (merge_world_space). Its object BVH, and a located hit's
+    /// corners, are then in world space; the Embree glue keeps object spaces, whose bits
+    /// Embree's instanced hits have.
+    bool world_space_single_instances = true;
     /// Merge the object subtrees that world-space BRefs name into the traced top level
     /// (MergedTopLevel): rays reach them without entering their instances.
     bool merge_world_space = true;

@@ -61,12 +61,13 @@ struct MergedTopLevel {
 
 /// The merge of `top`'s world-space items that name inner object nodes (items whose
 /// instance's target is InstanceTarget::kWorldSpace, views[target.mesh] their BVH; only
-/// top-level leaves of one item, the top builders' leaves), when they are at least half of
-/// its items; an empty MergedTopLevel otherwise, for a top level whose root is a leaf, and
-/// where the copy would hold more nodes than a NodeRef can name.
-/// The merged traversal costs every node a little more (the choice of leaf visit, the source
-/// of each object leaf), which the entries saved repay only where they are most of them
-/// (docs/design.md, "Entering an instance"). Deterministic: subtrees are placed in the top
+/// top-level leaves of one item, the top builders' leaves), when at least half of its items
+/// are world-space items (naming inner nodes or leaves); an empty MergedTopLevel otherwise,
+/// for a top level whose root is a leaf, and where the copy would hold more nodes than a
+/// NodeRef can name. The merged traversal costs every node a little more (the choice of leaf
+/// visit, the source of each object leaf), which the entries saved repay where most items
+/// need no ray of their own; where most enter placed instances, it did not (docs/design.md,
+/// "World-space items merged into the top level"). Deterministic: subtrees are placed in the top
 /// level's node and slot order, whatever the thread count.
 MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
                                        std::span<const InstanceTarget> targets,

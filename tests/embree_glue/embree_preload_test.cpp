@@ -110,6 +110,14 @@ TEST(EmbreePreload, BadAccelSettingSaysWhyAndLeavesEverySceneToEmbree) {
               "rebraid preload: REBRAID_ACCEL=rebraid:opening=widest: accel "
               "'rebraid:opening=widest': opening=widest: valid values: extent, sah, overlap; "
               "Embree serves every scene\n");
+    // The drop-in keeps every mesh in its object space, where Embree computes instance hits.
+    const CommandResult world_space =
+        run_program(dir, "world", preload_environment("REBRAID_ACCEL=rebraid:world-single=1"),
+                    client_command("trace"));
+    EXPECT_TRUE(embree.out == world_space.out);
+    EXPECT_NE(world_space.err.find("world_space_single_instances is not supported"),
+              std::string::npos)
+        << world_space.err;
     const CommandResult other = run_program(dir, "other", preload_environment("REBRAID_ACCEL=flat"),
                                             client_command("trace"));
     EXPECT_TRUE(embree.out == other.out);

@@ -45,6 +45,14 @@ std::vector<NamedAccel> project_accels() {
          [](const Scene& s) { return std::make_unique<InstancedAccel>(build_two_level_accel(s)); }},
         {"rebraid",
          [](const Scene& s) { return std::make_unique<InstancedAccel>(build_rebraid_accel(s)); }},
+        // Meshes placed once keep their object space, as under the Embree glue.
+        {"rebraid:world-single=0",
+         [](const Scene& s) {
+             RebraidSettings settings;
+             settings.world_space_single_instances = false;
+             return std::make_unique<InstancedAccel>(
+                 build_rebraid_accel(s, own_object_bvh_builder(), settings));
+         }},
     };
 }
 
@@ -129,6 +137,19 @@ TEST(AccelEquivalence, IdentityAndTransformedInstancesTogetherMatchEmbreeFlat) {
     expect_matches_embree_flat(mixed, "every third instance at the identity");
     expect_matches_embree_flat(bake_instances_into_world_space(test::make_overlap_scene(24, 5)),
                                "objects in world space");
+}
+
+// Meshes placed by one instance each are built in world space by default
+// (world_space_single_instances): alone, where a top of them is merged, and beside meshes
+// that several instances place.
+TEST(AccelEquivalence, MeshesPlacedOnceMatchEmbreeFlat) {
+    expect_matches_embree_flat(test::make_overlap_scene(3, 7), "each mesh placed once");
+    Scene mixed = test::make_overlap_scene(24, 5);
+    for (std::size_t i = 0; i < 4; ++i) {
+        mixed.meshes.push_back(mixed.meshes[mixed.instances[i].mesh_id]);
+        mixed.instances[i].mesh_id = MeshId(mixed.meshes.size() - 1);
+    }
+    expect_matches_embree_flat(mixed, "four meshes placed once among shared ones");
 }
 
 class SharedSceneEquivalence : public testing::TestWithParam<std::string> {};
