@@ -227,7 +227,7 @@ const std::vector<VariantKey>& variant_keys() {
          named_choice(&Settings::require_overlap,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"overlap-threshold", real_number(&Settings::overlap_threshold)},
-        {"budget-doublings", whole_number(&Settings::budget_doublings, 16)},
+        {"budget-doublings", whole_number(&Settings::budget_doublings, kMaxBudgetDoublings)},
         {"rebuild-tree",
          named_choice(&Settings::rebuild_tree,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
@@ -247,6 +247,7 @@ const std::vector<VariantKey>& variant_keys() {
               return a.rebraid.build.collapse == b.rebraid.build.collapse;
           }}},
         {"budget-search-min-use", real_number(&Settings::budget_search_min_use)},
+        {"budget-search-extra-gain", real_number(&Settings::budget_search_extra_gain)},
         {"robust",
          {[](const VariantValue& value, AccelOptions& options) {
               options.is_robust = value.choice<bool>(std::vector<std::pair<std::string_view, bool>>{

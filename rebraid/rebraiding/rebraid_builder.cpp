@@ -435,7 +435,18 @@ TrackedBuild search_larger_budgets(const RebraidInputs& inputs, const RebraidSet
     TrackedBuild best = doubled->cost < first.cost ? std::move(*doubled) : std::move(first);
     if (settings.budget_doublings < 2 || !doubling_pays || !doubled_used_its_budget) return best;
     std::optional<TrackedBuild> largest = build_times(settings.budget_doublings);
-    if (largest && largest->cost < best.cost) return std::move(*largest);
+    if (!largest || !(largest->cost < best.cost)) return best;
+    best = std::move(*largest);
+    // Beyond it, one doubling at a time while the last build filled its budget and each
+    // doubling pays by budget_search_extra_gain of the top's own cost (powerplant).
+    for (std::uint32_t doublings = settings.budget_doublings + 1;
+         doublings <= kMaxBudgetDoublings && used_its_budget(best.build); ++doublings) {
+        std::optional<TrackedBuild> more = build_times(doublings);
+        if (!more || best.cost - more->cost < double(settings.budget_search_extra_gain) *
+                                                  top_level_own_cost(best.build.top))
+            break;
+        best = std::move(*more);
+    }
     return best;
 }
 

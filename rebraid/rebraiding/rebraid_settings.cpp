@@ -32,12 +32,14 @@ void RebraidSettings::validate() const {
           instance_entry_cost, "must be finite and >= 0");
     check(std::isfinite(overlap_threshold) && overlap_threshold >= 0.0f, "overlap_threshold",
           overlap_threshold, "must be finite and >= 0");
-    if (budget_doublings > 16)
+    if (budget_doublings > kMaxBudgetDoublings)
         throw Error("re-braiding setting budget_doublings " + std::to_string(budget_doublings) +
-                    " must be at most 16");
+                    " must be at most " + std::to_string(kMaxBudgetDoublings));
     check(std::isfinite(budget_search_min_gain) && budget_search_min_gain >= 0.0f &&
               budget_search_min_gain < 1.0f,
           "budget_search_min_gain", budget_search_min_gain, "must be finite and in [0, 1)");
+    check(std::isfinite(budget_search_extra_gain) && budget_search_extra_gain >= 0.0f,
+          "budget_search_extra_gain", budget_search_extra_gain, "must be finite and >= 0");
     check(std::isfinite(budget_search_min_use) && budget_search_min_use >= 0.0f &&
               budget_search_min_use <= 1.0f,
           "budget_search_min_use", budget_search_min_use, "must be finite and in [0, 1]");

@@ -35,6 +35,9 @@ enum class OpeningRule {
     overlap,
 };
 
+/// Most doublings of the BRef budget the budget search makes (RebraidSettings).
+inline constexpr std::uint32_t kMaxBudgetDoublings = 16;
+
 /// Parameters of the re-braiding top-level builder (Benthin et al. 2017). Defaults: the paper's
 /// threshold, budget and termination, with two rules beyond the paper that measured better on
 /// every scene (bench/RESULTS.md): `sah` opening and BRef bounds from the
@@ -72,6 +75,15 @@ struct RebraidSettings {
     /// largest budget, relative to the part of the SAH cost the top level itself makes (its
     /// nodes and the boxes entering objects).
     float budget_search_min_gain = 0.01f;
+    /// Beyond `budget_doublings`, the budget search doubles once more, and again, while the
+    /// last build it kept filled its budget (`budget_search_min_use`) and each doubling
+    /// lowered the exact cost by at least this fraction of the part the top level itself
+    /// makes. The generated powerplant (objects in world space overlapping everywhere) fills
+    /// x8 and x16 lowers its cost by 6.5 % of that part: 1.07x / 1.06x as fast on primary /
+    /// diffuse rays as with x8, for 25 ms more top build (94 to 120 ms of a 770 ms build);
+    /// cg57_cruiser fills x8 too, but x16 lowered its cost by 0.9 % and traced 3-5 % slower
+    /// (more items naming object leaves, each entered): it stops at x8 (docs/design.md).
+    float budget_search_extra_gain = 0.03f;
     /// The budget search builds again only after a build that filled at least this fraction of
     /// its budget: a build that left free space unused was not held back by its budget, and
     /// where nothing opens (forests, cities) a larger budget would only repeat the build. 0

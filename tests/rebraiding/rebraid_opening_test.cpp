@@ -106,6 +106,9 @@ std::uint64_t structure_hash_of(const Scene& scene, const std::vector<ObjectBvh>
     return *accel.stats().structure_hash;
 }
 
+/// A budget_search_extra_gain no doubling reaches: the search stops at budget_doublings.
+constexpr float kNeverBeyond = 1e30f;
+
 /// 80 small objects crossing each other in world space: a scene where the SAH rule opens.
 Scene make_crossing_crown_scene() {
     return generate_scene(SceneKind::kCrown, {.instance_count = 80, .seed = 7});
@@ -377,6 +380,7 @@ TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
             const RebraidSettings fixed{.budget_factor = c.budget_factor,
                                         .budget_doublings = 0,
                                         .budget_search_min_gain = 0.0f,
+                                        .budget_search_extra_gain = kNeverBeyond,
                                         .budget_search_min_use = 0.0f,
                                         .opening_rule = rule,
                                         .rebuild_tree = false};
@@ -426,6 +430,7 @@ TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
         // The trees grown while opening, whose costs the search compares.
         const RebraidSettings base{.budget_factor = 1.0f,
                                    .budget_doublings = 0,
+                                   .budget_search_extra_gain = kNeverBeyond,
                                    .budget_search_min_use = 0.0f,
                                    .opening_rule = rule,
                                    .rebuild_tree = false};
@@ -453,6 +458,51 @@ TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
         EXPECT_EQ(hash_of(stopped), hash_of(one_doubling));
         EXPECT_NE(hash_of(stopped), hash_of(unhindered));
     }
+}
+
+TEST(RebraidOpening, BudgetSearchDoublesBeyondTheLargestWhileEachDoublingPays) {
+    // The crossing crown at one extra BRef per instance, where each doubling lowers the cost
+    // several times over (BudgetSearchStopsWhenADoublingGainsTooLittle).
+    const Scene scene = make_crossing_crown_scene();
+    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+    const auto hash_of = [&](const RebraidBuild& build) {
+        return structure_hash_of(scene, bvhs, RebraidBuild(build).top);
+    };
+    const auto cost_of = [&](const RebraidBuild& build) {
+        return absolute_cost(scene, bvhs, RebraidBuild(build).top);
+    };
+    const RebraidSettings base{.budget_factor = 1.0f,
+                               .budget_doublings = 2,
+                               .budget_search_min_gain = 0.0f,
+                               .budget_search_min_use = 0.0f,
+                               .opening_rule = OpeningRule::extent,
+                               .rebuild_tree = false};
+    const auto search = [&](float extra_gain) {
+        RebraidSettings settings = base;
+        settings.budget_search_extra_gain = extra_gain;
+        return build_rebraid(scene, bvhs, settings);
+    };
+    const std::uint64_t rule_budget =
+        bref_budget(base, scene.instances.size(), scene.instanced_triangle_count());
+    // No doubling beyond the second: the search ends at x4, where it pays here.
+    const RebraidBuild at_largest = search(kNeverBeyond);
+    ASSERT_GT(at_largest.budget, 2 * rule_budget) << "x4 should pay here";
+    // Any gain enough: on while a doubling lowers the cost, to a cheaper top.
+    const RebraidBuild beyond = search(0.0f);
+    EXPECT_GT(beyond.budget, at_largest.budget);
+    EXPECT_LT(cost_of(beyond), cost_of(at_largest));
+    // Each doubling beyond x4 was kept only for lowering the cost: x8 (the first tried) is
+    // not cheaper than what the search kept.
+    RebraidSettings times_eight = base;
+    times_eight.budget_factor = 8.0f;
+    times_eight.budget_doublings = 0;
+    EXPECT_LE(cost_of(beyond), cost_of(build_rebraid(scene, bvhs, times_eight)));
+    // A gain no doubling reaches: x4, as without the rule.
+    const RebraidBuild held = search(0.99f);
+    EXPECT_EQ(held.budget, at_largest.budget);
+    EXPECT_EQ(hash_of(held), hash_of(at_largest));
+    EXPECT_THROW((RebraidSettings{.budget_search_extra_gain = -0.1f}.validate()), Error);
+    EXPECT_THROW((RebraidSettings{.budget_doublings = kMaxBudgetDoublings + 1}.validate()), Error);
 }
 
 TEST(RebraidOpening, BudgetSearchDoublesOnlyABudgetSpentInFull) {
