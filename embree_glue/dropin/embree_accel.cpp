@@ -112,10 +112,11 @@ void EmbreeAccelSettings::validate() const {
     own_builder.validate();
     embree_builder.validate();
     rebraid.validate();
-    if (rebraid.world_space_single_instances)
+    if (rebraid.world_space_single_instances || rebraid.world_space_copy_budget != 0.0f)
         throw Error(
-            "EmbreeAccelSettings: rebraid.world_space_single_instances is not "
-            "supported: the drop-in traces each mesh in its object space, as Embree does");
+            "EmbreeAccelSettings: rebraid.world_space_single_instances and "
+            "world_space_copy_budget are not supported: the drop-in traces each mesh in "
+            "its object space, as Embree does");
     object_update.validate();
 }
 

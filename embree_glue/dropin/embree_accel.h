@@ -33,12 +33,13 @@ struct EmbreeAccelSettings {
     /// rtcBuildBVH, when `object_builder` is embree.
     glue::EmbreeBvhBuilderSettings embree_builder{};
     /// The re-braided top level. Every mesh keeps its object space
-    /// (world_space_single_instances off; validate() rejects it on): Embree computes an
-    /// instance's hits there, which the drop-in reproduces bit for bit, and update() keeps
-    /// object BVHs while instances move.
+    /// (world_space_single_instances off, world_space_copy_budget 0; validate() rejects
+    /// others): Embree computes an instance's hits there, which the drop-in reproduces bit for
+    /// bit, and update() keeps object BVHs while instances move.
     RebraidSettings rebraid = [] {
         RebraidSettings settings;
         settings.world_space_single_instances = false;
+        settings.world_space_copy_budget = 0.0f;
         return settings;
     }();
     /// How update() brings the object BVHs of deformed meshes up to date (refit, rotations,

@@ -234,6 +234,7 @@ const std::vector<VariantKey>& variant_keys() {
         {"world-single",
          named_choice(&Settings::world_space_single_instances,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
+        {"world-copies", real_number(&Settings::world_space_copy_budget)},
         {"merge-world",
          named_choice(&Settings::merge_world_space,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},

@@ -36,6 +36,8 @@ std::string_view stats_field_note(std::string_view key) {
     if (key == "brefs") return "top-level references: one per instance, plus those opening added";
     if (key == "budget") return "extra BRefs opening may add beyond one per instance";
     if (key == "opened") return "BRefs opened into their children";
+    if (key == "mesh_copies")
+        return "world-space copies of meshes several instances place (world-copies)";
     if (key == "kernels") return "instruction set of the traversal (REBRAID_SIMD chooses)";
     if (key == "triangle_test")
         return "ray-triangle test of the traversal: moller (Embree's default) or watertight "

@@ -27,6 +27,7 @@ void for_each_stats_field(const AccelStats& stats, Visitor&& visit) {
     visit("brefs", stats.brefs);
     visit("budget", stats.budget);
     visit("opened", stats.opened);
+    visit("mesh_copies", stats.mesh_copies);
     visit("kernels", stats.kernels);
     visit("triangle_test", stats.triangle_test);
 }

@@ -33,6 +33,9 @@ struct AccelStats {
     std::optional<std::uint64_t> brefs;   ///< rebraid: BRefs after opening
     std::optional<std::uint64_t> budget;  ///< rebraid: BRef array capacity
     std::optional<std::uint64_t> opened;  ///< rebraid: BRefs opened
+    /// rebraid: world-space copies of meshes that several instances place, beyond the meshes
+    /// (`meshes` counts the scene's; RebraidSettings::world_space_copy_budget).
+    std::optional<std::uint64_t> mesh_copies;
     /// Instruction set of the traversal kernels rays take (simd_level.h), where one is chosen.
     std::optional<std::string> kernels;
     /// Ray-triangle test of the traversal (triangle_test.h), where one is chosen.

@@ -38,6 +38,8 @@ void RebraidSettings::validate() const {
     check(std::isfinite(budget_search_min_gain) && budget_search_min_gain >= 0.0f &&
               budget_search_min_gain < 1.0f,
           "budget_search_min_gain", budget_search_min_gain, "must be finite and in [0, 1)");
+    check(std::isfinite(world_space_copy_budget) && world_space_copy_budget >= 0.0f,
+          "world_space_copy_budget", world_space_copy_budget, "must be finite and >= 0");
     check(std::isfinite(budget_search_extra_gain) && budget_search_extra_gain >= 0.0f,
           "budget_search_extra_gain", budget_search_extra_gain, "must be finite and >= 0");
     check(std::isfinite(budget_search_min_use) && budget_search_min_use >= 0.0f &&

@@ -120,7 +120,8 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     build_info_.top_build_ms = build_info_.top_build_ms.value_or(0.0) + records_ms;
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
-    build_info_.meshes = scene.meshes.size();
+    // The scene's meshes: copies a build made of them (AccelStats::mesh_copies) are its own.
+    build_info_.meshes = scene.meshes.size() - build_info_.mesh_copies.value_or(0);
 }
 
 Hit InstancedAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {

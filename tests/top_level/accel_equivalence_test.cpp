@@ -45,11 +45,12 @@ std::vector<NamedAccel> project_accels() {
          [](const Scene& s) { return std::make_unique<InstancedAccel>(build_two_level_accel(s)); }},
         {"rebraid",
          [](const Scene& s) { return std::make_unique<InstancedAccel>(build_rebraid_accel(s)); }},
-        // Meshes placed once keep their object space, as under the Embree glue.
-        {"rebraid:world-single=0",
+        // Every mesh keeps its object space, as under the Embree glue.
+        {"rebraid:world-single=0:world-copies=0",
          [](const Scene& s) {
              RebraidSettings settings;
              settings.world_space_single_instances = false;
+             settings.world_space_copy_budget = 0.0f;
              return std::make_unique<InstancedAccel>(
                  build_rebraid_accel(s, own_object_bvh_builder(), settings));
          }},
@@ -141,7 +142,7 @@ TEST(AccelEquivalence, IdentityAndTransformedInstancesTogetherMatchEmbreeFlat) {
 
 // Meshes placed by one instance each are built in world space by default
 // (world_space_single_instances): alone, where a top of them is merged, and beside meshes
-// that several instances place.
+// that several instances place; and copies of shared meshes (world_space_copy_budget).
 TEST(AccelEquivalence, MeshesPlacedOnceMatchEmbreeFlat) {
     expect_matches_embree_flat(test::make_overlap_scene(3, 7), "each mesh placed once");
     Scene mixed = test::make_overlap_scene(24, 5);
@@ -150,6 +151,8 @@ TEST(AccelEquivalence, MeshesPlacedOnceMatchEmbreeFlat) {
         mixed.instances[i].mesh_id = MeshId(mixed.meshes.size() - 1);
     }
     expect_matches_embree_flat(mixed, "four meshes placed once among shared ones");
+    // Three meshes placed twice: the copies of the smallest fit world_space_copy_budget.
+    expect_matches_embree_flat(test::make_overlap_scene(6, 7), "meshes placed twice");
 }
 
 class SharedSceneEquivalence : public testing::TestWithParam<std::string> {};

@@ -1,8 +1,8 @@
-// Meshes placed by one instance, built in world space (world_space_single_instances.h): which
-// meshes move, that ids and triangles stay, and what a re-braided structure makes of them.
+// Meshes built in world space (world_space_meshes.h): which meshes move or are copied, that
+// instance ids and triangles stay, and what a re-braided structure makes of them.
 // Hits against Embree's flat scene: accel_equivalence_test.cpp (MeshesPlacedOnceMatchEmbreeFlat
 // and every shared scene).
-#include "rebraid/rebraiding/world_space_single_instances.h"
+#include "rebraid/rebraiding/world_space_meshes.h"
 
 #include <gtest/gtest.h>
 
@@ -36,9 +36,9 @@ Scene mixed_placements() {
     return scene;
 }
 
-TEST(WorldSpaceSingleInstances, MovesOnlyMeshesPlacedOnceByATransform) {
+TEST(WorldSpaceMeshes, MovesOnlyMeshesPlacedOnceByATransform) {
     const Scene scene = mixed_placements();
-    const std::optional<Scene> world = single_instances_in_world_space(scene);
+    const std::optional<Scene> world = meshes_in_world_space(scene, {});
     ASSERT_TRUE(world.has_value());
     ASSERT_EQ(world->meshes.size(), scene.meshes.size());
     ASSERT_EQ(world->instances.size(), scene.instances.size());
@@ -68,14 +68,73 @@ TEST(WorldSpaceSingleInstances, MovesOnlyMeshesPlacedOnceByATransform) {
         EXPECT_EQ(world->meshes[m].positions, scene.meshes[m].positions) << m;
 }
 
-TEST(WorldSpaceSingleInstances, NothingToMoveGivesNothing) {
+TEST(WorldSpaceMeshes, NothingToMoveGivesNothing) {
     // Every mesh placed several times.
-    EXPECT_FALSE(single_instances_in_world_space(test::make_overlap_scene(24, 5)).has_value());
+    EXPECT_FALSE(meshes_in_world_space(test::make_overlap_scene(24, 5), {}).has_value());
     // Placed once, by the identity or past the float range.
     Scene scene = mixed_placements();
     scene.instances = {scene.instances[3], scene.instances[4]};
-    EXPECT_FALSE(single_instances_in_world_space(scene).has_value());
-    EXPECT_FALSE(single_instances_in_world_space(Scene{}).has_value());
+    EXPECT_FALSE(meshes_in_world_space(scene, {}).has_value());
+    EXPECT_FALSE(meshes_in_world_space(Scene{}, {}).has_value());
+    // Asked for nothing.
+    EXPECT_FALSE(meshes_in_world_space(mixed_placements(), {.single_instances = false}));
+}
+
+/// Expects `world`'s instance `i` to place, by the identity, `scene`'s instance i's triangles
+/// mapped into world space.
+void expect_placed_in_world_space(const Scene& scene, const Scene& world, std::size_t i) {
+    const Instance& original = scene.instances[i];
+    const Instance& moved = world.instances[i];
+    EXPECT_EQ(moved.object_to_world, AffineTransform::identity()) << i;
+    const Mesh& source = scene.meshes[original.mesh_id];
+    const Mesh& copy = world.meshes[moved.mesh_id];
+    EXPECT_EQ(copy.triangles, source.triangles) << i;
+    ASSERT_EQ(copy.positions.size(), source.positions.size()) << i;
+    for (std::size_t v = 0; v < source.positions.size(); ++v) {
+        const Vec3f expected = original.object_to_world.transform_point(source.positions[v]);
+        EXPECT_NEAR(copy.positions[v].x, expected.x, 1e-5f);
+        EXPECT_NEAR(copy.positions[v].y, expected.y, 1e-5f);
+        EXPECT_NEAR(copy.positions[v].z, expected.z, 1e-5f);
+    }
+}
+
+TEST(WorldSpaceMeshes, CopiesSharedMeshesWithinTheBudgetFewestTrianglesFirst) {
+    // Mesh 0: 40 triangles placed twice (adds 40), mesh 1: 60 placed three times (adds 120),
+    // mesh 2: 10 placed once. 110 mesh triangles (instanced: 270).
+    Scene scene;
+    scene.meshes = {test::make_triangle_soup(40, 1), test::make_triangle_soup(60, 2),
+                    test::make_triangle_soup(10, 3)};
+    Random random(5);
+    for (const MeshId mesh : {1u, 0u, 1u, 2u, 0u, 1u})
+        scene.instances.push_back({mesh, test::random_transform(random, 3.0f, true)});
+    // 0.4 of 110 is 44: mesh 0's copy fits, mesh 1's do not.
+    const std::optional<Scene> world =
+        meshes_in_world_space(scene, {.single_instances = true, .copy_budget = 0.4f});
+    ASSERT_TRUE(world.has_value());
+    ASSERT_EQ(world->instances.size(), scene.instances.size());
+    // Mesh 0's first instance (1) takes its place, its second (4) a copy after the meshes.
+    ASSERT_EQ(world->meshes.size(), 4u);
+    EXPECT_EQ(world->instances[1].mesh_id, 0u);
+    EXPECT_EQ(world->instances[4].mesh_id, 3u);
+    for (const std::size_t i : {1u, 3u, 4u}) expect_placed_in_world_space(scene, *world, i);
+    for (const std::size_t i : {0u, 2u, 5u}) {
+        EXPECT_EQ(world->instances[i].mesh_id, scene.instances[i].mesh_id) << i;
+        EXPECT_EQ(world->instances[i].object_to_world, scene.instances[i].object_to_world) << i;
+    }
+    EXPECT_EQ(world->meshes[1].positions, scene.meshes[1].positions);
+    // Enough for both (160 added triangles): every instance in world space, one mesh each.
+    const std::optional<Scene> all =
+        meshes_in_world_space(scene, {.single_instances = true, .copy_budget = 1.5f});
+    ASSERT_TRUE(all.has_value());
+    EXPECT_EQ(all->meshes.size(), scene.instances.size());
+    for (std::size_t i = 0; i < scene.instances.size(); ++i)
+        expect_placed_in_world_space(scene, *all, i);
+    // Copies only: the mesh placed once keeps its space.
+    const std::optional<Scene> copies =
+        meshes_in_world_space(scene, {.single_instances = false, .copy_budget = 1.5f});
+    ASSERT_TRUE(copies.has_value());
+    EXPECT_EQ(copies->instances[3].object_to_world, scene.instances[3].object_to_world);
+    EXPECT_EQ(copies->meshes[2].positions, scene.meshes[2].positions);
 }
 
 InstancedAccel rebraided(const Scene& scene, bool world_space) {
@@ -86,7 +145,7 @@ InstancedAccel rebraided(const Scene& scene, bool world_space) {
 
 // Each mesh placed once: in world space every item needs no ray of its own, and the top is
 // merged; with object spaces kept, every instance is entered with a mapped ray.
-TEST(WorldSpaceSingleInstances, ATopOfMeshesPlacedOnceIsMerged) {
+TEST(WorldSpaceMeshes, ATopOfMeshesPlacedOnceIsMerged) {
     const Scene scene = test::make_overlap_scene(3, 7);
     const InstancedAccel world = rebraided(scene, true);
     const InstancedAccel object_spaces = rebraided(scene, false);
@@ -100,7 +159,7 @@ TEST(WorldSpaceSingleInstances, ATopOfMeshesPlacedOnceIsMerged) {
     EXPECT_EQ(world.stats().triangles, object_spaces.stats().triangles);
 }
 
-TEST(WorldSpaceSingleInstances, SameStructureOnAnyThreadCount) {
+TEST(WorldSpaceMeshes, SameStructureOnAnyThreadCount) {
     Scene scene = test::make_overlap_scene(24, 5);
     for (std::size_t i = 0; i < 6; ++i) {
         scene.meshes.push_back(scene.meshes[scene.instances[i].mesh_id]);
