@@ -192,7 +192,7 @@ struct RebraidSettings {
     /// memory where a mesh repeats many times; a mesh placed twice or four times (mirrored
     /// parts of a machine) saves little and costs each ray that reaches it a mapped ray. On
     /// two_cylinder_engine a quarter of its mesh triangles copies 13 of its 14 shared meshes
-    /// (the 20 placements of its bolt stay instanced) and the top is merged: 1.06x / 1.08x as
+    /// (the 20 placements of its bolt stay instanced) and the top is merged: 1.05x / 1.07x as
     /// fast on primary / diffuse rays, at 8.6 instead of 6.6 MB (docs/design.md).
     float world_space_copy_budget = 0.25f;
     /// Merge the object subtrees that world-space BRefs name into the traced top level
