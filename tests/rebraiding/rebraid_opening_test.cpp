@@ -414,17 +414,25 @@ TEST(RebraidOpening, BudgetSearchKeepsTheCheapestOfTheBudgetsItTries) {
     }
 }
 
+/// The crossing crown, its object BVHs, and the structure hash and SAH of builds over them.
+struct CrownBuilds {
+    Scene scene = make_crossing_crown_scene();
+    std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
+
+    std::uint64_t hash_of(const RebraidBuild& build) const {
+        return structure_hash_of(scene, bvhs, RebraidBuild(build).top);
+    }
+    double cost_of(const RebraidBuild& build) const {
+        return absolute_cost(scene, bvhs, RebraidBuild(build).top);
+    }
+};
+
 TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
     // The crown's small objects pack into each other: from one extra BRef per instance, each
     // doubling of the budget opens more overlap and lowers the cost, several times over.
-    const Scene scene = make_crossing_crown_scene();
-    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
-    const auto hash_of = [&](const RebraidBuild& build) {
-        return structure_hash_of(scene, bvhs, RebraidBuild(build).top);
-    };
-    const auto cost_of = [&](const RebraidBuild& build) {
-        return absolute_cost(scene, bvhs, RebraidBuild(build).top);
-    };
+    const CrownBuilds crown;
+    const Scene& scene = crown.scene;
+    const std::vector<ObjectBvh>& bvhs = crown.bvhs;
     for (const OpeningRule rule : {OpeningRule::extent, OpeningRule::sah}) {
         SCOPED_TRACE(int(rule));
         // The trees grown while opening, whose costs the search compares.
@@ -449,28 +457,23 @@ TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
         // largest budget, a cheaper top than one doubling finds.
         const RebraidBuild unhindered = search(8, 0.0f);
         EXPECT_GT(unhindered.budget, 2 * rule_budget);
-        EXPECT_LT(cost_of(unhindered), cost_of(one_doubling));
+        EXPECT_LT(crown.cost_of(unhindered), crown.cost_of(one_doubling));
         // A least gain the first doubling does not reach: the search keeps it (it is
         // cheaper) and stops there, although eight doublings are allowed.
         const RebraidBuild stopped = search(8, 0.99f);
         EXPECT_EQ(stopped.budget, one_doubling.budget);
         EXPECT_EQ(stopped.brefs, one_doubling.brefs);
-        EXPECT_EQ(hash_of(stopped), hash_of(one_doubling));
-        EXPECT_NE(hash_of(stopped), hash_of(unhindered));
+        EXPECT_EQ(crown.hash_of(stopped), crown.hash_of(one_doubling));
+        EXPECT_NE(crown.hash_of(stopped), crown.hash_of(unhindered));
     }
 }
 
 TEST(RebraidOpening, BudgetSearchDoublesBeyondTheLargestWhileEachDoublingPays) {
     // The crossing crown at one extra BRef per instance, where each doubling lowers the cost
     // several times over (BudgetSearchStopsWhenADoublingGainsTooLittle).
-    const Scene scene = make_crossing_crown_scene();
-    const std::vector<ObjectBvh> bvhs = build_object_bvhs(scene, own_object_bvh_builder());
-    const auto hash_of = [&](const RebraidBuild& build) {
-        return structure_hash_of(scene, bvhs, RebraidBuild(build).top);
-    };
-    const auto cost_of = [&](const RebraidBuild& build) {
-        return absolute_cost(scene, bvhs, RebraidBuild(build).top);
-    };
+    const CrownBuilds crown;
+    const Scene& scene = crown.scene;
+    const std::vector<ObjectBvh>& bvhs = crown.bvhs;
     const RebraidSettings base{.budget_factor = 1.0f,
                                .budget_doublings = 2,
                                .budget_search_min_gain = 0.0f,
@@ -490,17 +493,17 @@ TEST(RebraidOpening, BudgetSearchDoublesBeyondTheLargestWhileEachDoublingPays) {
     // Any gain enough: on while a doubling lowers the cost, to a cheaper top.
     const RebraidBuild beyond = search(0.0f);
     EXPECT_GT(beyond.budget, at_largest.budget);
-    EXPECT_LT(cost_of(beyond), cost_of(at_largest));
+    EXPECT_LT(crown.cost_of(beyond), crown.cost_of(at_largest));
     // Each doubling beyond x4 was kept only for lowering the cost: x8 (the first tried) is
     // not cheaper than what the search kept.
     RebraidSettings times_eight = base;
     times_eight.budget_factor = 8.0f;
     times_eight.budget_doublings = 0;
-    EXPECT_LE(cost_of(beyond), cost_of(build_rebraid(scene, bvhs, times_eight)));
+    EXPECT_LE(crown.cost_of(beyond), crown.cost_of(build_rebraid(scene, bvhs, times_eight)));
     // A gain no doubling reaches: x4, as without the rule.
     const RebraidBuild held = search(0.99f);
     EXPECT_EQ(held.budget, at_largest.budget);
-    EXPECT_EQ(hash_of(held), hash_of(at_largest));
+    EXPECT_EQ(crown.hash_of(held), crown.hash_of(at_largest));
     EXPECT_THROW((RebraidSettings{.budget_search_extra_gain = -0.1f}.validate()), Error);
     EXPECT_THROW((RebraidSettings{.budget_doublings = kMaxBudgetDoublings + 1}.validate()), Error);
 }
