@@ -189,8 +189,8 @@ struct RebraidSettings {
     /// Also give each instance of a mesh that several instances place a world-space copy of
     /// its own, while the copies add at most this fraction of the scene's mesh triangles
     /// (the meshes whose copies add the fewest triangles first; 0: none). Instancing saves
-    /// memory where a mesh repeats many times; a mesh placed twice or four times (mirrored
-    /// parts of a machine) saves little and costs each ray that reaches it a mapped ray. On
+    /// memory where a mesh repeats many times; a mesh placed two or four times saves little
+    /// and costs each ray that reaches it a mapped ray. On
     /// two_cylinder_engine a quarter of its mesh triangles copies 13 of its 14 shared meshes
     /// (the 20 placements of its bolt stay instanced) and the top is merged: 1.05x / 1.07x as
     /// fast on primary / diffuse rays, at 8.6 instead of 6.6 MB (docs/design.md).
