@@ -34,7 +34,7 @@ std::vector<MeshId> meshes_to_move(const Scene& scene,
         const std::vector<InstanceId>& placed_by = placements[mesh];
         if (placed_by.size() == 1) {
             if (settings.single_instances &&
-                !(scene.instances[placed_by[0]].object_to_world == AffineTransform::identity()))
+                scene.instances[placed_by[0]].object_to_world != AffineTransform::identity())
                 moving.push_back(MeshId(mesh));
         } else if (placed_by.size() > 1) {
             shared.push_back(

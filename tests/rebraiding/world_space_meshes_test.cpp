@@ -36,6 +36,25 @@ Scene mixed_placements() {
     return scene;
 }
 
+/// Expects `world`'s instance `i` to place, by the identity, `scene`'s instance i's triangles
+/// mapped into world space.
+void expect_placed_in_world_space(const Scene& scene, const Scene& world, std::size_t i) {
+    const Instance& original = scene.instances[i];
+    const Instance& moved = world.instances[i];
+    EXPECT_EQ(moved.object_to_world, AffineTransform::identity()) << i;
+    const Mesh& source = scene.meshes[original.mesh_id];
+    const Mesh& copy = world.meshes[moved.mesh_id];
+    EXPECT_EQ(copy.triangles, source.triangles) << i;
+    ASSERT_EQ(copy.positions.size(), source.positions.size()) << i;
+    for (std::size_t v = 0; v < source.positions.size(); ++v) {
+        const Vec3f expected = original.object_to_world.transform_point(source.positions[v]);
+        // Within rounding: the library may fuse the transform's products and sums.
+        EXPECT_NEAR(copy.positions[v].x, expected.x, 1e-5f);
+        EXPECT_NEAR(copy.positions[v].y, expected.y, 1e-5f);
+        EXPECT_NEAR(copy.positions[v].z, expected.z, 1e-5f);
+    }
+}
+
 TEST(WorldSpaceMeshes, MovesOnlyMeshesPlacedOnceByATransform) {
     const Scene scene = mixed_placements();
     const std::optional<Scene> world = meshes_in_world_space(scene, {});
@@ -50,17 +69,7 @@ TEST(WorldSpaceMeshes, MovesOnlyMeshesPlacedOnceByATransform) {
     }
 
     // Mesh 0: its positions mapped, its instance at the identity.
-    const AffineTransform& placement = scene.instances[0].object_to_world;
-    EXPECT_EQ(world->instances[0].object_to_world, AffineTransform::identity());
-    ASSERT_EQ(world->meshes[0].positions.size(), scene.meshes[0].positions.size());
-    for (std::size_t v = 0; v < scene.meshes[0].positions.size(); ++v) {
-        const Vec3f expected = placement.transform_point(scene.meshes[0].positions[v]);
-        const Vec3f got = world->meshes[0].positions[v];
-        // Within rounding: the library may fuse the transform's products and sums.
-        EXPECT_NEAR(got.x, expected.x, 1e-5f);
-        EXPECT_NEAR(got.y, expected.y, 1e-5f);
-        EXPECT_NEAR(got.z, expected.z, 1e-5f);
-    }
+    expect_placed_in_world_space(scene, *world, 0);
     // Mesh 1 (shared), mesh 2 (already in world space), mesh 3 (would overflow): kept.
     for (const std::size_t i : {1u, 2u, 3u, 4u})
         EXPECT_EQ(world->instances[i].object_to_world, scene.instances[i].object_to_world) << i;
@@ -78,24 +87,6 @@ TEST(WorldSpaceMeshes, NothingToMoveGivesNothing) {
     EXPECT_FALSE(meshes_in_world_space(Scene{}, {}).has_value());
     // Asked for nothing.
     EXPECT_FALSE(meshes_in_world_space(mixed_placements(), {.single_instances = false}));
-}
-
-/// Expects `world`'s instance `i` to place, by the identity, `scene`'s instance i's triangles
-/// mapped into world space.
-void expect_placed_in_world_space(const Scene& scene, const Scene& world, std::size_t i) {
-    const Instance& original = scene.instances[i];
-    const Instance& moved = world.instances[i];
-    EXPECT_EQ(moved.object_to_world, AffineTransform::identity()) << i;
-    const Mesh& source = scene.meshes[original.mesh_id];
-    const Mesh& copy = world.meshes[moved.mesh_id];
-    EXPECT_EQ(copy.triangles, source.triangles) << i;
-    ASSERT_EQ(copy.positions.size(), source.positions.size()) << i;
-    for (std::size_t v = 0; v < source.positions.size(); ++v) {
-        const Vec3f expected = original.object_to_world.transform_point(source.positions[v]);
-        EXPECT_NEAR(copy.positions[v].x, expected.x, 1e-5f);
-        EXPECT_NEAR(copy.positions[v].y, expected.y, 1e-5f);
-        EXPECT_NEAR(copy.positions[v].z, expected.z, 1e-5f);
-    }
 }
 
 TEST(WorldSpaceMeshes, CopiesSharedMeshesWithinTheBudgetFewestTrianglesFirst) {
