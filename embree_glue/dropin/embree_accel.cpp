@@ -77,7 +77,7 @@ std::unique_ptr<InstancedAccel> build_top(const Scene& scene, std::vector<Object
     info.budget = build.budget;
     info.opened = build.opened;
     return std::make_unique<InstancedAccel>(scene, std::move(object_bvhs), std::move(build.top),
-                                            info, settings.merge_world_space);
+                                            info, settings.merge_settings());
 }
 
 /// The triangle test of Embree's mode for `converted`: watertight in robust mode.

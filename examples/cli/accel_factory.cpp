@@ -238,6 +238,10 @@ const std::vector<VariantKey>& variant_keys() {
         {"merge-world",
          named_choice(&Settings::merge_world_space,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
+        {"merge-placed",
+         named_choice(&Settings::merge_placed_instances,
+                      {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
+        {"merge-placed-budget", real_number(&Settings::merge_placed_node_budget)},
         {"top-collapse",
          {[](const VariantValue& value, AccelOptions& options) {
               options.rebraid.build.collapse =

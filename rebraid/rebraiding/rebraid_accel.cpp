@@ -29,7 +29,7 @@ InstancedAccel build_rebraid_accel(const Scene& scene, const ObjectBvhBuilder& o
     info.opened = build.opened;
     info.mesh_copies = built.meshes.size() - scene.meshes.size();
     return InstancedAccel(built, std::move(object_bvhs), std::move(build.top), info,
-                          settings.merge_world_space);
+                          settings.merge_settings());
 }
 
 }  // namespace rebraid

@@ -40,6 +40,8 @@ void RebraidSettings::validate() const {
           "budget_search_min_gain", budget_search_min_gain, "must be finite and in [0, 1)");
     check(std::isfinite(world_space_copy_budget) && world_space_copy_budget >= 0.0f,
           "world_space_copy_budget", world_space_copy_budget, "must be finite and >= 0");
+    check(std::isfinite(merge_placed_node_budget) && merge_placed_node_budget >= 0.0f,
+          "merge_placed_node_budget", merge_placed_node_budget, "must be finite and >= 0");
     check(std::isfinite(budget_search_extra_gain) && budget_search_extra_gain >= 0.0f,
           "budget_search_extra_gain", budget_search_extra_gain, "must be finite and >= 0");
     check(std::isfinite(budget_search_min_use) && budget_search_min_use >= 0.0f &&

@@ -4,6 +4,7 @@
 
 #include "rebraid/bvh/build_settings.h"
 #include "rebraid/rebraiding/bref_bounds.h"
+#include "rebraid/top_level/merged_top_level.h"
 
 namespace rebraid {
 
@@ -198,6 +199,11 @@ struct RebraidSettings {
     /// Merge the object subtrees that world-space BRefs name into the traced top level
     /// (MergedTopLevel): rays reach them without entering their instances.
     bool merge_world_space = true;
+    /// Merge those of BRefs of placed instances too, traversed in their object spaces
+    /// (TopLevelMergeSettings::placed_instances), while their copies hold at most
+    /// merge_placed_node_budget times the object BVHs' inner nodes.
+    bool merge_placed_instances = false;
+    float merge_placed_node_budget = 1.0f;
     /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
     /// cover at least this fraction of its box (estimated on a grid over the segment).
     float overlap_threshold = 0.25f;
@@ -212,6 +218,13 @@ struct RebraidSettings {
     /// greedy cut and traced faster on every scene that opens but fzk_haus (docs/design.md).
     BuildSettings build{
         .max_leaf_size = 1, .task_threshold = 32, .collapse = NodeCollapse::optimal};
+
+    /// What the traced tree merges (InstancedAccel's `merge`).
+    TopLevelMergeSettings merge_settings() const {
+        return {.world_space = merge_world_space,
+                .placed_instances = merge_placed_instances,
+                .placed_node_budget = merge_placed_node_budget};
+    }
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.
     void validate() const;

@@ -72,7 +72,7 @@ void share_object_spaces(std::vector<InstanceTarget>& targets) {
 
 InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs,
                                TopLevelBvh top, const AccelStats& build_info,
-                               bool merge_world_space)
+                               const TopLevelMergeSettings& merge)
     : object_bvhs_(std::move(object_bvhs)),
       top_(std::move(top)),
       build_info_(build_info),
@@ -112,8 +112,12 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     });
     share_object_spaces(instance_targets_);
     // Part of the top level's build time too: it is made again with every top level.
-    if (merge_world_space)
-        merged_ = merge_world_space_items(top_, instance_targets_, object_views_);
+    if (merge.world_space || merge.placed_instances) {
+        std::uint64_t object_nodes = 0;
+        for (const ObjectBvh& bvh : object_bvhs_) object_nodes += bvh.nodes.size();
+        merged_ = merge_top_level_items(top_, instance_targets_, object_views_, object_to_world_,
+                                        object_nodes, merge);
+    }
     use_kernels(simd_level_, triangle_test_);
     const double records_ms = timer.elapsed_ms();
     build_info_.build_ms += records_ms;

@@ -31,10 +31,11 @@ class InstancedAccel final : public Accel {
 public:
     /// `build_info` carries the build timings and builder-specific figures (BRefs, budget)
     /// for stats(); the rest of the statistics are computed from the structure.
-    /// `merge_world_space`: copy the object subtrees that the top level's world-space items
-    /// name into the traced tree (MergedTopLevel).
+    /// `merge`: which object subtrees that the top level's items name are copied into the
+    /// traced tree (MergedTopLevel); by default none.
     InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object_bvhs, TopLevelBvh top,
-                   const AccelStats& build_info, bool merge_world_space = false);
+                   const AccelStats& build_info,
+                   const TopLevelMergeSettings& merge = {.world_space = false});
     // Movable, not copyable: object_views() point into the object BVHs' arrays, which a
     // move carries along and a copy would not.
     InstancedAccel(InstancedAccel&&) = default;

@@ -1,10 +1,12 @@
 #include "rebraid/top_level/merged_top_level.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "rebraid/bvh/vertex_world_bounds.h"
 #include "rebraid/core/huge_pages.h"
 
 namespace rebraid {
@@ -18,12 +20,10 @@ struct MergedSlot {
 };
 
 /// The item a top-level leaf holds, when it can hang in the tree: one item naming an inner
-/// object node of an instance placed by the identity.
-const TopLevelItem* mergeable_item(const TopLevelBvh& top, std::span<const InstanceTarget> targets,
-                                   NodeRef leaf) {
+/// object node.
+const TopLevelItem* mergeable_item(const TopLevelBvh& top, NodeRef leaf) {
     if (!leaf.is_leaf() || leaf.prim_count() != 1) return nullptr;
     const TopLevelItem& item = top.items[leaf.first_prim()];
-    if (targets[item.instance_id].space != InstanceTarget::kWorldSpace) return nullptr;
     return item.object_node.is_inner() ? &item : nullptr;
 }
 
@@ -66,19 +66,51 @@ void copy_subtree(MergedTopLevel& merged, const ObjectBvhView& bvh, std::uint32_
     }
 }
 
+/// Gives the copied node `id` (copied from `bvh`, its instance placed by `to_world`) and
+/// the copied nodes below it world-space boxes: per leaf child the box of its triangles'
+/// corners mapped into the world, widened by 8 ulps of the mapping's terms as BRef boxes are
+/// (the box test in world space and the triangle test in object space round differently),
+/// per inner child the union of its children's. Returns the node's box.
+BBox3f fit_world_boxes(MergedTopLevel& merged, std::uint32_t id, const ObjectBvhView& bvh,
+                       const AffineTransform& to_world) {
+    BBox3f node_box;
+    for (int slot = 0; slot < kBvhWidth; ++slot) {
+        const NodeRef child = merged.nodes[id].children[slot];
+        if (child.is_empty()) continue;
+        BBox3f box;
+        if (child.is_inner()) {
+            box = fit_world_boxes(merged, child.node_id(), bvh, to_world);
+        } else {
+            float object_magnitude = 0.0f;
+            for (std::uint32_t i = child.first_prim(); i < child.first_prim() + child.prim_count();
+                 ++i)
+                for (const Vec3f& corner :
+                     {bvh.triangles[i].v0, bvh.triangles[i].v1, bvh.triangles[i].v2}) {
+                    box.extend(to_world.transform_point(corner));
+                    for (int axis = 0; axis < 3; ++axis)
+                        object_magnitude = std::max(object_magnitude, std::fabs(corner[axis]));
+                }
+            box = widen_for_mapping_rounding(box, to_world, object_magnitude, 8.0f);
+        }
+        merged.nodes[id].set_child(slot, child, box);
+        node_box.extend(box);
+    }
+    return node_box;
+}
+
 }  // namespace
 
-MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
-                                       std::span<const InstanceTarget> targets,
-                                       std::span<const ObjectBvhView> views) {
+MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
+                                     std::span<const InstanceTarget> targets,
+                                     std::span<const ObjectBvhView> views,
+                                     std::span<const AffineTransform> object_to_world,
+                                     std::uint64_t object_nodes,
+                                     const TopLevelMergeSettings& settings) {
     MergedTopLevel merged;
     if (!top.root.is_inner()) return merged;
-    std::vector<MergedSlot> slots;
-    for (std::uint32_t n = 0; n < top.nodes.size(); ++n)
-        for (int slot = 0; slot < kBvhWidth; ++slot)
-            if (const TopLevelItem* item =
-                    mergeable_item(top, targets, top.nodes[n].children[slot]))
-                slots.push_back({n, slot, item});
+    const auto is_world_space = [&](const TopLevelItem& item) {
+        return targets[item.instance_id].space == InstanceTarget::kWorldSpace;
+    };
     // Merged where most items are in world space: the merged loop costs every node a little
     // more (the choice of leaf visit, each object leaf's source), which the entries saved
     // repay unless most items still enter placed instances. Counting the world-space items
@@ -86,10 +118,16 @@ MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
     // whose meshes placed once are built in world space (meshes_in_world_space):
     // 0.95 -> 1.03 and 0.92 -> 1.01 of Embree flat's speed on diffuse rays (docs/design.md,
     // "World-space items merged into the top level").
-    const auto world_items = std::ranges::count_if(top.items, [&](const TopLevelItem& item) {
-        return targets[item.instance_id].space == InstanceTarget::kWorldSpace;
-    });
-    if (slots.empty() || 2 * std::size_t(world_items) < top.items.size()) return merged;
+    const auto world_items = std::ranges::count_if(top.items, is_world_space);
+    const bool merges_world_space =
+        settings.world_space && 2 * std::size_t(world_items) >= top.items.size();
+    std::vector<MergedSlot> slots;
+    for (std::uint32_t n = 0; n < top.nodes.size(); ++n)
+        for (int slot = 0; slot < kBvhWidth; ++slot)
+            if (const TopLevelItem* item = mergeable_item(top, top.nodes[n].children[slot]))
+                if (is_world_space(*item) ? merges_world_space : settings.placed_instances)
+                    slots.push_back({n, slot, item});
+    if (slots.empty()) return merged;
 
     const auto bvh_of = [&](const MergedSlot& slot) -> const ObjectBvhView& {
         return views[targets[slot.item->instance_id].mesh];
@@ -102,6 +140,23 @@ MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             first_node[i + 1] = count_inner_nodes(bvh_of(slots[i]), slots[i].item->object_node);
     });
+    // Placed items over their budget: none of them is merged (the world-space ones still are,
+    // where they merge on their own).
+    std::uint64_t placed_nodes = 0;
+    for (std::size_t i = 0; i < slots.size(); ++i)
+        if (!is_world_space(*slots[i].item)) placed_nodes += first_node[i + 1];
+    if (double(placed_nodes) > double(settings.placed_node_budget) * double(object_nodes)) {
+        std::vector<MergedSlot> world_slots;
+        std::vector<std::uint32_t> world_first{0};
+        for (std::size_t i = 0; i < slots.size(); ++i)
+            if (is_world_space(*slots[i].item)) {
+                world_slots.push_back(slots[i]);
+                world_first.push_back(first_node[i + 1]);
+            }
+        if (world_slots.empty()) return merged;
+        slots = std::move(world_slots);
+        first_node = std::move(world_first);
+    }
     first_node[0] = std::uint32_t(top.nodes.size());
     std::uint64_t node_count = first_node[0];
     for (std::size_t i = 0; i < slots.size(); ++i) {
@@ -123,14 +178,21 @@ MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const MergedSlot& slot = slots[i];
             const ObjectBvhView& bvh = bvh_of(slot);
-            merged.sources[i] = {bvh.leaf_rows, bvh.triangles, bvh.prim_ids,
-                                 slot.item->instance_id};
+            const InstanceTarget& target = targets[slot.item->instance_id];
+            merged.sources[i] = {bvh.leaf_rows,          bvh.triangles, bvh.prim_ids,
+                                 slot.item->instance_id, &target,       target.space};
             copy_subtree(merged, bvh, std::uint32_t(i), slot.item->object_node, first_node[i]);
+            if (target.space != InstanceTarget::kWorldSpace)
+                fit_world_boxes(merged, first_node[i], bvh,
+                                object_to_world[slot.item->instance_id]);
             merged.nodes[slot.node].children[slot.slot] = NodeRef::inner(first_node[i]);
         }
     });
-    for (const MergedLeafSource& source : merged.sources)
+    for (const MergedLeafSource& source : merged.sources) {
         merged.every_source_has_rows = merged.every_source_has_rows && source.leaf_rows != nullptr;
+        merged.has_placed_sources =
+            merged.has_placed_sources || source.space != InstanceTarget::kWorldSpace;
+    }
     merged.root = top.root;
     return merged;
 }

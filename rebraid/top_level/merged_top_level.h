@@ -6,6 +6,7 @@
 
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/wide_node.h"
+#include "rebraid/core/transform.h"
 #include "rebraid/core/triangle.h"
 #include "rebraid/core/types.h"
 #include "rebraid/top_level/instance_target.h"
@@ -13,23 +14,47 @@
 
 namespace rebraid {
 
-/// Where the triangles of one merged subtree's leaves are (its object BVH's arrays).
+/// Where the triangles of one merged subtree's leaves are (its object BVH's arrays), and the
+/// space its boxes and corners are in.
 struct MergedLeafSource {
     const float* leaf_rows = nullptr;          ///< ObjectBvhView::leaf_rows
     const TriangleVerts* triangles = nullptr;  ///< ObjectBvhView::triangles
     const PrimId* prim_ids = nullptr;          ///< ObjectBvhView::prim_ids
     InstanceId instance = 0;
+    /// The instance's target (its world-to-object map), and its space: kWorldSpace, or the
+    /// space rays are mapped into (ObjectRayCache) before they test this subtree's triangles.
+    const InstanceTarget* target = nullptr;
+    std::uint32_t space = InstanceTarget::kWorldSpace;
 };
 
-/// A top level with the object nodes of its world-space items copied in: one tree that a ray
+/// Which items merge_top_level_items copies into the traced tree.
+struct TopLevelMergeSettings {
+    /// Items of instances placed by the identity (objects built in world space), where at
+    /// least half of the top's items are in world space.
+    bool world_space = true;
+    /// Also items of placed instances: their copied nodes get world-space boxes (their
+    /// triangles' corners mapped into the world, widened for the mapping's rounding as BRef
+    /// boxes are), so the world ray tests them as the top level's own, and their triangles
+    /// stay in object space, tested with the ray mapped as entering the item maps it (once
+    /// per run of leaves in the same space): the same hits, with the same bits. One loop and
+    /// one stack across both levels, nearest node first whatever its instance.
+    bool placed_instances = false;
+    /// Placed items are merged only while their copies add at most this many nodes per
+    /// inner node of the scene's object BVHs (an instance's copy is its own: a mesh placed
+    /// many times is copied as often).
+    float placed_node_budget = 1.0f;
+};
+
+/// A top level with the object nodes of its items copied in: one tree that a ray
 /// traverses without entering those instances. An item of an instance placed by the identity
 /// (an object built in world space, the paper's common case, §3.1) needs no ray of its own, so
 /// the object subtree it names can hang below the top-level node that held the item, as a
 /// subtree of a flat BVH would: the ray reaches those object nodes and leaves in the same loop
 /// and with the same stack as the top level's nodes, and entering no longer chains the item,
 /// its instance's record and its mesh's arrays before the first object node can be fetched.
-/// Items of placed instances and items that name object leaves stay leaves of the top level,
-/// entered as before (traverse_bvh's LeafVisits::by_node visits the two kinds).
+/// Items that name object leaves stay leaves of the top level, entered as before
+/// (traverse_bvh's LeafVisits::by_node visits the two kinds), as do items of placed instances
+/// unless TopLevelMergeSettings::placed_instances copies them too, in their object spaces.
 ///
 /// The copy holds the top level's nodes (same numbers) followed by each merged subtree's
 /// nodes; a copied object node keeps its leaf references, which still name triangles in its
@@ -45,6 +70,8 @@ struct MergedTopLevel {
     std::vector<MergedLeafSource> sources;
     /// Every source has pre-arranged rows: the SIMD kernels read rows only (one loop).
     bool every_source_has_rows = true;
+    /// Some source is in an object space (its leaves take a mapped ray).
+    bool has_placed_sources = false;
     /// The top level's root; empty when nothing was merged (traversal takes the top level).
     NodeRef root = NodeRef::empty();
 
@@ -59,18 +86,23 @@ struct MergedTopLevel {
     }
 };
 
-/// The merge of `top`'s world-space items that name inner object nodes (items whose
-/// instance's target is InstanceTarget::kWorldSpace, views[target.mesh] their BVH; only
-/// top-level leaves of one item, the top builders' leaves), when at least half of its items
-/// are world-space items (naming inner nodes or leaves); an empty MergedTopLevel otherwise,
-/// for a top level whose root is a leaf, and where the copy would hold more nodes than a
-/// NodeRef can name. The merged traversal costs every node a little more (the choice of leaf
-/// visit, the source of each object leaf), which the entries saved repay where most items
-/// need no ray of their own; where most enter placed instances, it did not (docs/design.md,
-/// "World-space items merged into the top level"). Deterministic: subtrees are placed in the top
-/// level's node and slot order, whatever the thread count.
-MergedTopLevel merge_world_space_items(const TopLevelBvh& top,
-                                       std::span<const InstanceTarget> targets,
-                                       std::span<const ObjectBvhView> views);
+/// The merge of `top`'s items that name inner object nodes (views[targets[instance].mesh]
+/// their BVH; only top-level leaves of one item, the top builders' leaves), as `settings`
+/// choose: world-space items (InstanceTarget::kWorldSpace) when at least half of the top's
+/// items are world-space items (naming inner nodes or leaves), items of placed instances
+/// (placed by `object_to_world`, per instance) when their copies hold at most
+/// placed_node_budget times `object_nodes` (the inner nodes of the scene's object BVHs) nodes. An
+/// empty MergedTopLevel when nothing is merged, for a top level whose root is a leaf, and where the
+/// copy would hold more nodes than a NodeRef can name. The merged traversal costs every node a
+/// little more (the choice of leaf visit, the source of each object leaf), which the entries saved
+/// repay where most items need no ray of their own; where most entered placed instances, it did not
+/// (docs/design.md, "World-space items merged into the top level"). Deterministic: subtrees are
+/// placed in the top level's node and slot order, whatever the thread count.
+MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
+                                     std::span<const InstanceTarget> targets,
+                                     std::span<const ObjectBvhView> views,
+                                     std::span<const AffineTransform> object_to_world,
+                                     std::uint64_t object_nodes,
+                                     const TopLevelMergeSettings& settings = {});
 
 }  // namespace rebraid

@@ -366,10 +366,14 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
         const auto object_leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
                                        unsigned slots) {
             Lanes lanes = source_lanes<Lanes>(source);
+            const TriangleGroupRay& source_ray =
+                source.space == InstanceTarget::kWorldSpace
+                    ? world_ray.triangle_ray
+                    : object_rays.ray_for(*source.target).triangle_ray;
             const auto test_lanes = [&] {
                 TriangleGroupHit group_hit;
                 if (lanes.template intersect<kTest>(
-                        world_ray.triangle_ray, world_ray.ray.tnear, world_ray.ray.tfar, group_hit,
+                        source_ray, world_ray.ray.tnear, world_ray.ray.tfar, group_hit,
                         located != nullptr ? &located->moller_terms : nullptr)) {
                     world_ray.ray.tfar = group_hit.t;
                     hit.t = group_hit.t;
@@ -417,11 +421,15 @@ template <TriangleTest kTest>
         const auto object_leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
                                        unsigned slots) {
             Lanes lanes = source_lanes<Lanes>(source);
+            const TriangleGroupRay& source_ray =
+                source.space == InstanceTarget::kWorldSpace
+                    ? world_ray.triangle_ray
+                    : object_rays.ray_for(*source.target).triangle_ray;
             bool is_occluded = false;
             const auto test_lanes = [&] {
-                is_occluded = is_occluded ||
-                              lanes.template occluded<kTest>(
-                                  world_ray.triangle_ray, world_ray.ray.tnear, world_ray.ray.tfar);
+                is_occluded =
+                    is_occluded || lanes.template occluded<kTest>(source_ray, world_ray.ray.tnear,
+                                                                  world_ray.ray.tfar);
                 lanes.clear();
             };
             add_leaves_and_test(lanes, refs, slots, nullptr, test_lanes,

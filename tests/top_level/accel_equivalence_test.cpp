@@ -54,6 +54,17 @@ std::vector<NamedAccel> project_accels() {
              return std::make_unique<InstancedAccel>(
                  build_rebraid_accel(s, own_object_bvh_builder(), settings));
          }},
+        // The same, with every item's object subtree merged into the traced tree.
+        {"rebraid:world-single=0:world-copies=0:merge-placed=1",
+         [](const Scene& s) {
+             RebraidSettings settings;
+             settings.world_space_single_instances = false;
+             settings.world_space_copy_budget = 0.0f;
+             settings.merge_placed_instances = true;
+             settings.merge_placed_node_budget = 1000.0f;
+             return std::make_unique<InstancedAccel>(
+                 build_rebraid_accel(s, own_object_bvh_builder(), settings));
+         }},
     };
 }
 

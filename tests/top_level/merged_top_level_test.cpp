@@ -1,7 +1,8 @@
-// The merge of world-space items into the traced top level (merged_top_level.h): where each
-// subtree hangs and what it holds, when it is made, and that rays find what they found by
-// entering the items. Its hits against Embree's flat scene are checked in
-// accel_equivalence_test.cpp ("objects in world space", merged as the first test here shows).
+// The merge of items into the traced top level (merged_top_level.h), world-space items and
+// items of placed instances: where each subtree hangs and what it holds, when it is made, and
+// that rays find what they found by entering the items. Its hits against Embree's flat scene are
+// checked in accel_equivalence_test.cpp ("objects in world space", merged as the first test here
+// shows).
 #include "rebraid/top_level/merged_top_level.h"
 
 #include <gtest/gtest.h>
@@ -28,10 +29,18 @@ Scene world_space_scene() {
     return bake_instances_into_world_space(test::make_overlap_scene(24, 5));
 }
 
-InstancedAccel rebraided(const Scene& scene, bool merge) {
+InstancedAccel rebraided(const Scene& scene, bool merge, bool merge_placed = false,
+                         float placed_node_budget = 100.0f) {
     RebraidSettings settings;
     settings.merge_world_space = merge;
+    settings.merge_placed_instances = merge_placed;
+    settings.merge_placed_node_budget = placed_node_budget;
     return build_rebraid_accel(scene, own_object_bvh_builder(), settings);
+}
+
+/// Placed instances, overlapping: their items are merged only with merge_placed_instances.
+Scene placed_scene() {
+    return test::make_overlap_scene(24, 5);
 }
 
 /// Child `slot`'s box in `a` and `b` have the same bits.
@@ -118,11 +127,97 @@ TEST(MergedTopLevel, MergesOnlyWhereMostItemsAreInWorldSpace) {
     EXPECT_TRUE(rebraided(world_space_scene(), false).merged_top_level().empty());
 }
 
-TEST(MergedTopLevel, RaysFindWhatEnteringTheItemsFinds) {
-    const Scene scene = world_space_scene();
-    InstancedAccel merged = rebraided(scene, true);
+/// Checks the copy below `copy` of the object subtree below `original` of a placed instance's
+/// `bvh`: the same leaves and shape, and each child's box in world space, holding the
+/// corners of the child's triangles mapped by `to_world`.
+void expect_world_boxed_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
+                                const AffineTransform& to_world, NodeRef original, NodeRef copy,
+                                std::vector<int>& reached) {
+    ASSERT_TRUE(copy.is_inner());
+    ASSERT_TRUE(merged.is_object_node(copy.node_id()));
+    ++reached[copy.node_id()];
+    const WideNode& a = bvh.nodes[original.node_id()];
+    const WideNode& b = merged.nodes[copy.node_id()];
+    for (int slot = 0; slot < kBvhWidth; ++slot) {
+        const NodeRef child = a.children[slot];
+        if (child.is_empty()) {
+            EXPECT_TRUE(b.children[slot].is_empty());
+            continue;
+        }
+        const BBox3f box = b.child_bounds(slot);
+        std::vector<NodeRef> below{child};  // the leaves under this child
+        while (!below.empty()) {
+            const NodeRef ref = below.back();
+            below.pop_back();
+            if (ref.is_inner()) {
+                for (const NodeRef grandchild : bvh.nodes[ref.node_id()].children)
+                    if (!grandchild.is_empty()) below.push_back(grandchild);
+                continue;
+            }
+            for (std::uint32_t i = ref.first_prim(); i < ref.first_prim() + ref.prim_count(); ++i)
+                for (const Vec3f& corner :
+                     {bvh.triangles[i].v0, bvh.triangles[i].v1, bvh.triangles[i].v2}) {
+                    const Vec3f world = to_world.transform_point(corner);
+                    for (int axis = 0; axis < 3; ++axis) {
+                        EXPECT_LE(box.min[axis], world[axis]);
+                        EXPECT_GE(box.max[axis], world[axis]);
+                    }
+                }
+        }
+        if (child.is_inner())
+            expect_world_boxed_subtree(merged, bvh, to_world, child, b.children[slot], reached);
+        else
+            EXPECT_EQ(child, b.children[slot]);
+    }
+}
+
+TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
+    const Scene scene = placed_scene();
+    const InstancedAccel accel = rebraided(scene, true, true);
+    const TopLevelBvh& top = accel.top_level();
+    const MergedTopLevel& merged = accel.merged_top_level();
+    ASSERT_FALSE(merged.empty());
+    EXPECT_TRUE(merged.has_placed_sources);
+    std::vector<int> reached(merged.nodes.size(), 0);
+    std::size_t merged_items = 0;
+    for (std::uint32_t n = 0; n < top.nodes.size(); ++n)
+        for (int slot = 0; slot < kBvhWidth; ++slot) {
+            const NodeRef child = top.nodes[n].children[slot];
+            const NodeRef copy = merged.nodes[n].children[slot];
+            EXPECT_TRUE(same_child_box(top.nodes[n], merged.nodes[n], slot));
+            if (!child.is_leaf() || copy == child) continue;
+            const TopLevelItem& item = top.items[child.first_prim()];
+            const InstanceTarget& target = accel.instance_targets()[item.instance_id];
+            EXPECT_NE(target.space, InstanceTarget::kWorldSpace);
+            const MergedLeafSource& source = merged.source_of(copy.node_id());
+            EXPECT_EQ(source.instance, item.instance_id);
+            EXPECT_EQ(source.target, &target);
+            EXPECT_EQ(source.space, target.space);
+            expect_world_boxed_subtree(merged, accel.object_views()[target.mesh],
+                                       scene.instances[item.instance_id].object_to_world,
+                                       item.object_node, copy, reached);
+            ++merged_items;
+        }
+    EXPECT_EQ(merged_items, merged.sources.size());
+    for (std::size_t id = 0; id < reached.size(); ++id)
+        EXPECT_EQ(reached[id], merged.is_object_node(std::uint32_t(id)) ? 1 : 0) << id;
+}
+
+TEST(MergedTopLevel, MergesPlacedItemsOnlyWhenAskedAndWithinTheirBudget) {
+    EXPECT_TRUE(rebraided(placed_scene(), true, false).merged_top_level().empty());
+    EXPECT_TRUE(rebraided(placed_scene(), true, true, 0.0f).merged_top_level().empty());
+    EXPECT_FALSE(rebraided(placed_scene(), true, true, 100.0f).merged_top_level().empty());
+}
+
+class MergedRays : public ::testing::TestWithParam<bool> {};
+
+TEST_P(MergedRays, FindWhatEnteringTheItemsFinds) {
+    const bool placed = GetParam();
+    const Scene scene = placed ? placed_scene() : world_space_scene();
+    InstancedAccel merged = rebraided(scene, true, placed);
     InstancedAccel entered = rebraided(scene, false);
     ASSERT_FALSE(merged.merged_top_level().empty());
+    EXPECT_EQ(merged.merged_top_level().has_placed_sources, placed);
     const std::vector<Ray> rays = test::varied_rays(entered, scene.bounds(), 10000, 7);
     for (const TriangleTest test : {TriangleTest::moller, TriangleTest::watertight}) {
         for (const SimdLevel level : runnable_simd_levels()) {
@@ -159,10 +254,11 @@ TEST(MergedTopLevel, RaysFindWhatEnteringTheItemsFinds) {
     }
 }
 
-TEST(MergedTopLevel, SameCopyOnAnyThreadCount) {
-    const Scene scene = world_space_scene();
+TEST_P(MergedRays, SameCopyOnAnyThreadCount) {
+    const bool placed = GetParam();
+    const Scene scene = placed ? placed_scene() : world_space_scene();
     test::expect_same_hash_on_threads({1, 2, 8}, [&] {
-        const InstancedAccel accel = rebraided(scene, true);
+        const InstancedAccel accel = rebraided(scene, true, placed);
         const MergedTopLevel& merged = accel.merged_top_level();
         StructureHash hash;
         hash.add<WideNode>(merged.nodes);
@@ -171,6 +267,11 @@ TEST(MergedTopLevel, SameCopyOnAnyThreadCount) {
         return hash.value();
     });
 }
+
+INSTANTIATE_TEST_SUITE_P(MergedTopLevel, MergedRays, ::testing::Values(false, true),
+                         [](const auto& info) {
+                             return info.param ? "PlacedItems" : "WorldSpaceItems";
+                         });
 
 }  // namespace
 }  // namespace rebraid
