@@ -54,7 +54,8 @@ struct TopLevelMergeSettings {
 /// its instance's record and its mesh's arrays before the first object node can be fetched.
 /// Items that name object leaves stay leaves of the top level, entered as before
 /// (traverse_bvh's LeafVisits::by_node visits the two kinds), as do items of placed instances
-/// unless TopLevelMergeSettings::placed_instances copies them too, in their object spaces.
+/// unless TopLevelMergeSettings::placed_instances copies them too (world-space boxes over
+/// object-space triangles).
 ///
 /// The copy holds the top level's nodes (same numbers) followed by each merged subtree's
 /// nodes; a copied object node keeps its leaf references, which still name triangles in its
