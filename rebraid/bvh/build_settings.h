@@ -62,7 +62,8 @@ struct BuildSettings {
     /// measuring what the 8-wide layout buys (bench/bench_traversal.cpp's max_children).
     std::uint32_t max_children = kBvhWidth;
     /// Keep each leaf's corners also pre-arranged for the SIMD triangle test (leaf_rows.h):
-    /// 36 more bytes per triangle, for no transpose per test (docs/design.md, "Leaves").
+    /// 40 more bytes per triangle (the corners and the primID), for no transpose per test and
+    /// no id lookup per hit (docs/design.md, "Leaves").
     /// Without them the kernels gather corners from the per-triangle copies.
     bool pre_arranged_leaves = true;
 

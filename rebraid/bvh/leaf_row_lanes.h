@@ -1,5 +1,6 @@
 #pragma once
 
+#include <bit>
 #include <cstdint>
 
 #include "rebraid/bvh/leaf_rows.h"
@@ -42,14 +43,14 @@ public:
     /// The 9 rows of the gathered triangles (lanes past count() hold arbitrary values).
     void load_rows(__m256 (&rows)[9]) const {
         const Segment& first = segments_[0];  // starts at lane 0
-        for (std::uint32_t r = 0; r < 9; ++r)
+        for (std::uint32_t r = 0; r < kCornerRows; ++r)
             rows[r] = _mm256_loadu_ps(first.base + std::size_t(r) * first.stride);
         for (std::uint32_t s = 1; s < segment_count_; ++s) {
             const Segment& segment = segments_[s];
             // Lanes from segment.lane on; later segments overwrite the lanes past this one.
             const __m256 lanes = _mm256_loadu_ps(kLanesFrom + 8 - segment.lane);
             const float* shifted = segment.base - segment.lane;
-            for (std::uint32_t r = 0; r < 9; ++r)
+            for (std::uint32_t r = 0; r < kCornerRows; ++r)
                 rows[r] = _mm256_blendv_ps(
                     rows[r], _mm256_loadu_ps(shifted + std::size_t(r) * segment.stride), lanes);
         }
@@ -74,6 +75,14 @@ public:
     std::uint32_t position(std::uint32_t lane) const {
         const Segment& segment = segment_of(lane);
         return segment.position + (lane - segment.lane);
+    }
+    /// The rows hold each triangle's primID (prim_id()).
+    static constexpr bool kHoldsPrimIds = true;
+    /// PrimID of the triangle in `lane`, from its leaf's id row.
+    PrimId prim_id(std::uint32_t lane) const {
+        const Segment& segment = segment_of(lane);
+        return std::bit_cast<PrimId>(
+            segment.base[std::size_t(kCornerRows) * segment.stride + (lane - segment.lane)]);
     }
     /// Corners of the triangle in `lane`, from its rows.
     TriangleVerts corners(std::uint32_t lane) const {

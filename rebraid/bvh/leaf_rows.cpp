@@ -1,5 +1,6 @@
 #include "rebraid/bvh/leaf_rows.h"
 
+#include <bit>
 #include <string>
 
 #include "rebraid/core/error.h"
@@ -7,7 +8,8 @@
 
 namespace rebraid {
 
-void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, float* rows) {
+void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, const PrimId* prim_ids,
+                     float* rows) {
     const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
     float* out = rows + kLeafRowPadding + std::size_t(kRowFloatsPerTriangle) * first;
     for (std::uint32_t i = 0; i < count; ++i) {
@@ -15,13 +17,17 @@ void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, float* rows) 
         const Vec3f corners[3] = {t.v0, t.v1, t.v2};
         for (int c = 0; c < 3; ++c)
             for (int a = 0; a < 3; ++a) out[(3 * c + a) * count + i] = corners[c][a];
+        out[kCornerRows * count + i] = std::bit_cast<float>(prim_ids[first + i]);
     }
 }
 
 void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
-                       const std::vector<TriangleVerts>& triangles, std::vector<float>& rows) {
-    if (rows.size() != kRowFloatsPerTriangle * triangles.size() + 2 * kLeafRowPadding)
-        throw Error("rewrite_leaf_rows: " + std::to_string(rows.size()) + " floats for " +
+                       const std::vector<TriangleVerts>& triangles,
+                       const std::vector<PrimId>& prim_ids, std::vector<float>& rows) {
+    if (rows.size() != kRowFloatsPerTriangle * triangles.size() + 2 * kLeafRowPadding ||
+        prim_ids.size() != triangles.size())
+        throw Error("rewrite_leaf_rows: " + std::to_string(rows.size()) + " floats and " +
+                    std::to_string(prim_ids.size()) + " ids for " +
                     std::to_string(triangles.size()) + " triangles (internal error)");
     if (root.is_empty()) return;
     std::vector<NodeRef> pending{root};
@@ -29,7 +35,7 @@ void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
         const NodeRef ref = pending.back();
         pending.pop_back();
         if (ref.is_leaf()) {
-            write_leaf_rows(ref, triangles.data(), rows.data());
+            write_leaf_rows(ref, triangles.data(), prim_ids.data(), rows.data());
             continue;
         }
         for (const NodeRef child : nodes[ref.node_id()].children)
@@ -38,7 +44,8 @@ void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
 }
 
 std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
-                                  const std::vector<TriangleVerts>& triangles) {
+                                  const std::vector<TriangleVerts>& triangles,
+                                  const std::vector<PrimId>& prim_ids) {
     // Zeros in the padding and in positions no leaf covers: loads past a leaf read finite
     // values into lanes that are masked off.
     // On huge pages when large, as the corners are: rays in random order touch rows all
@@ -46,7 +53,7 @@ std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef ro
     std::vector<float> rows;
     reserve_on_huge_pages(rows, kRowFloatsPerTriangle * triangles.size() + 2 * kLeafRowPadding);
     rows.resize(kRowFloatsPerTriangle * triangles.size() + 2 * kLeafRowPadding, 0.0f);
-    rewrite_leaf_rows(nodes, root, triangles, rows);
+    rewrite_leaf_rows(nodes, root, triangles, prim_ids, rows);
     return rows;
 }
 

@@ -5,6 +5,7 @@
 
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/triangle.h"
+#include "rebraid/core/types.h"
 
 namespace rebraid {
 
@@ -12,8 +13,11 @@ namespace rebraid {
 /// up to this many floats before the leaf and run as far past it.
 inline constexpr std::uint32_t kLeafRowPadding = 8;
 
-/// Floats of rows per triangle: 3 corners by 3 axes.
-inline constexpr std::uint32_t kRowFloatsPerTriangle = 9;
+/// Rows of corners: 3 corners by 3 axes.
+inline constexpr std::uint32_t kCornerRows = 9;
+
+/// Floats of rows per triangle: the corner rows, then the triangle's primID (its bits).
+inline constexpr std::uint32_t kRowFloatsPerTriangle = kCornerRows + 1;
 
 /// The rows of the leaf whose triangles start at leaf-order position `first` (`rows` past the
 /// leading padding); row r of a leaf of n triangles starts n * r floats further.
@@ -22,22 +26,27 @@ inline const float* leaf_rows_at(const float* rows, std::uint32_t first) {
 }
 
 /// The corners of every leaf's triangles stored pre-arranged for the SIMD group test: the
-/// leaf at leaf-order positions [p, p + n) holds 9 rows of n floats at floats [9p, 9p + 9n)
+/// leaf at leaf-order positions [p, p + n) holds 10 rows of n floats at floats [10p, 10p + 10n)
 /// (after the leading padding), row 3c + a holding axis a of corner c of the leaf's
-/// triangles in order. A test then loads each row straight into its lanes instead of
-/// transposing three corners per triangle, at no more memory than the corners themselves.
-/// Built from `triangles` (leaf order) and the leaves of `nodes` below `root`.
+/// triangles in order, row 9 their primIDs (the PrimId's bits). A test then loads each row
+/// straight into its lanes instead of transposing three corners per triangle, and a hit's
+/// primID is read from the leaf just tested: from an array of its own it was a cache miss
+/// per hit on scenes larger than the caches (as Embree keeps ids in its triangle leaves).
+/// Built from `triangles` and `prim_ids` (leaf order) and the leaves of `nodes` below `root`.
 std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
-                                  const std::vector<TriangleVerts>& triangles);
+                                  const std::vector<TriangleVerts>& triangles,
+                                  const std::vector<PrimId>& prim_ids);
 
 /// Writes the rows of every leaf below `root` again, in place (the buffer keeps its address,
 /// which traversal views point into): after an update changed corners or regrouped leaves.
 /// `rows` must hold as many floats as make_leaf_rows made for these triangles.
 void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
-                       const std::vector<TriangleVerts>& triangles, std::vector<float>& rows);
+                       const std::vector<TriangleVerts>& triangles,
+                       const std::vector<PrimId>& prim_ids, std::vector<float>& rows);
 
-/// Writes the rows of one leaf again from `triangles` (leaf order) into `rows` (the whole
-/// buffer, padding included).
-void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, float* rows);
+/// Writes the rows of one leaf again from `triangles` and `prim_ids` (leaf order) into `rows`
+/// (the whole buffer, padding included).
+void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, const PrimId* prim_ids,
+                     float* rows);
 
 }  // namespace rebraid

@@ -14,7 +14,7 @@ void ObjectBvh::refresh_node_prim_counts() {
 }
 
 void ObjectBvh::refresh_leaf_rows() {
-    if (!leaf_rows.empty()) rewrite_leaf_rows(nodes, root, triangles, leaf_rows);
+    if (!leaf_rows.empty()) rewrite_leaf_rows(nodes, root, triangles, prim_ids, leaf_rows);
 }
 
 }  // namespace rebraid

@@ -42,7 +42,8 @@ ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> le
         const auto corners = mesh.corners(bvh.prim_ids[i]);
         bvh.triangles[i] = {corners[0], corners[1], corners[2]};
     });
-    if (pre_arranged_leaves) bvh.leaf_rows = make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles);
+    if (pre_arranged_leaves)
+        bvh.leaf_rows = make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, bvh.prim_ids);
     bvh.node_prim_counts = subtree_prim_counts(bvh);
     return bvh;
 }

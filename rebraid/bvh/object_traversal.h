@@ -2,6 +2,7 @@
 
 #include <bit>
 #include <cstdint>
+#include <optional>
 
 #include "rebraid/bvh/hit_triangle.h"
 #include "rebraid/bvh/leaf_row_lanes.h"
@@ -34,7 +35,7 @@ inline bool rows_serve([[maybe_unused]] ObjectBvhView bvh, [[maybe_unused]] Node
 /// A closer-hit callback that does nothing (intersect_object_bvh_leaf_order's default).
 struct NoHitDataPrefetch {
     template <class Corners>
-    void operator()(std::uint32_t, Corners&&) const {}
+    void operator()(std::uint32_t, Corners&&, std::optional<PrimId>) const {}
 };
 
 /// The triangles of several leaves (leaf-order ranges of one BVH) gathered into lanes of
@@ -116,6 +117,16 @@ constexpr bool moller_terms_computed() {
 
 namespace object_traversal_detail {
 
+/// The primID of the triangle in `lane` where the lanes' storage holds it (leaf rows).
+template <class Lanes>
+std::optional<PrimId> row_prim_id([[maybe_unused]] const Lanes& lanes,
+                                  [[maybe_unused]] std::uint32_t lane) {
+    if constexpr (requires { Lanes::kHoldsPrimIds; })
+        return lanes.prim_id(lane);
+    else
+        return std::nullopt;
+}
+
 /// intersect_object_bvh_leaf_order with `lanes` gathering the leaves' triangles.
 template <TriangleTest kTest, class Lanes, class HitDataPrefetch>
 bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
@@ -132,8 +143,9 @@ bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pr
             hit.u = group_hit.u;
             hit.v = group_hit.v;
             hit.prim_id = lanes.position(group_hit.index);
-            prefetch_hit_data(hit.prim_id,
-                              [&lanes, lane = group_hit.index] { return lanes.corners(lane); });
+            prefetch_hit_data(
+                hit.prim_id, [&lanes, lane = group_hit.index] { return lanes.corners(lane); },
+                row_prim_id(lanes, group_hit.index));
             found = true;
         }
         lanes.clear();
@@ -174,14 +186,15 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
 /// Closest hit among the triangles below `start` (any node of `bvh`) by the triangle test
 /// `kTest`, for a ray already in the BVH's space. On a closer hit sets ray.tfar and hit.t/u/v, and
 /// hit.prim_id to the hit's position in leaf order (index into bvh.prim_ids and bvh.triangles), and
-/// returns true; leaves hit.instance_id to the caller. `prefetch_hit_data(position, corners)` is
-/// called with the leaf-order position of every closer hit as it is found, and `corners()` gives
-/// that triangle's corners from the leaf data the test has just read: the caller prefetches what it
-/// will look up for the final hit (ids in leaf order), so that the lookup's cache miss overlaps the
-/// rest of the traversal, or copies the corners. (Asking for every visited leaf's ids instead cost
-/// more than the misses it hid.) `start_leaf` says what a leaf `start` may be (StartLeaf). With
-/// `terms` given, a SIMD kernel's Möller test writes each closer hit's terms there before
-/// `prefetch_hit_data` is called (moller_terms_computed).
+/// returns true; leaves hit.instance_id to the caller. `prefetch_hit_data(position, corners,
+/// row_id)` is called with the leaf-order position of every closer hit as it is found,
+/// `corners()` gives that triangle's corners from the leaf data the test has just read, and
+/// `row_id` its primID where that data holds it (leaf rows; else nullopt): the caller prefetches
+/// what it will look up for the final hit (ids in leaf order), so that the lookup's cache miss
+/// overlaps the rest of the traversal, or copies the corners. (Asking for every visited leaf's ids
+/// instead cost more than the misses it hid.) `start_leaf` says what a leaf `start` may be
+/// (StartLeaf). With `terms` given, a SIMD kernel's Möller test writes each closer hit's terms
+/// there before `prefetch_hit_data` is called (moller_terms_computed).
 template <TriangleTest kTest, class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                                      Hit& hit, TraversalCounters* counters,
@@ -216,8 +229,12 @@ bool intersect_object_bvh(
     StartLeaf start_leaf = StartLeaf::whole) {
     Hit leaf_order_hit = hit;
     const PrimId* prim_ids = bvh.prim_ids;
-    const auto prefetch_hit_data = [&](std::uint32_t position, auto&& corners) {
-        __builtin_prefetch(prim_ids + position);
+    // The closest hit's primID where its leaf's rows gave it (no lookup after the query).
+    std::optional<PrimId> row_id;
+    const auto prefetch_hit_data = [&](std::uint32_t position, auto&& corners,
+                                       std::optional<PrimId> id_from_rows) {
+        row_id = id_from_rows;
+        if (!row_id) __builtin_prefetch(prim_ids + position);
         if (located != nullptr) {
             located->leaf_position = position;
             located->corners = corners();
@@ -230,7 +247,7 @@ bool intersect_object_bvh(
             located != nullptr ? &located->moller_terms : nullptr))
         return false;
     hit = leaf_order_hit;
-    hit.prim_id = prim_ids[leaf_order_hit.prim_id];
+    hit.prim_id = row_id ? *row_id : prim_ids[leaf_order_hit.prim_id];
     return true;
 }
 

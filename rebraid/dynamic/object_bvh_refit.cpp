@@ -57,7 +57,8 @@ BBox3f refit_leaf(const Mesh& mesh, ObjectBvh& bvh, NodeRef leaf) {
         bvh.triangles[i] = {corners[0], corners[1], corners[2]};
         for (const Vec3f& corner : corners) box.extend(corner);
     }
-    if (!bvh.leaf_rows.empty()) write_leaf_rows(leaf, bvh.triangles.data(), bvh.leaf_rows.data());
+    if (!bvh.leaf_rows.empty())
+        write_leaf_rows(leaf, bvh.triangles.data(), bvh.prim_ids.data(), bvh.leaf_rows.data());
     return box;
 }
 

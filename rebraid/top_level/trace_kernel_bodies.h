@@ -30,7 +30,7 @@ template <TriangleTest kTest>
     // hit are asked for as it is found.
     const InstanceId* instances = accel.triangle_instances().data();
     const PrimId* prims = accel.triangle_prims().data();
-    const auto prefetch_ids = [instances, prims](std::uint32_t position, auto&&) {
+    const auto prefetch_ids = [instances, prims](std::uint32_t position, auto&&, auto&&) {
         __builtin_prefetch(instances + position);
         __builtin_prefetch(prims + position);
     };
@@ -359,9 +359,10 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
         PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
         ObjectRayCache object_rays(world_ray);
         const ItemEntries entries(accel);
-        // A hit in a merged object leaf keeps its leaf-order position until the query ends,
-        // and these ids turn it into a primID then (as intersect_object_bvh does: the lookup's
-        // miss overlaps the rest of the traversal); null when an entered item gave the hit.
+        // A hit in a merged object leaf read from the corner storage keeps its leaf-order
+        // position until the query ends, and these ids turn it into a primID then (as
+        // intersect_object_bvh does: the lookup's miss overlaps the rest of the traversal);
+        // null when the leaf rows gave the primID or an entered item gave the hit.
         const PrimId* hit_prim_ids = nullptr;
         const auto object_leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
                                        unsigned slots) {
@@ -379,12 +380,19 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
                     hit.t = group_hit.t;
                     hit.u = group_hit.u;
                     hit.v = group_hit.v;
-                    hit.prim_id = lanes.position(group_hit.index);
+                    const std::uint32_t position = lanes.position(group_hit.index);
                     hit.instance_id = source.instance;
-                    hit_prim_ids = source.prim_ids;
-                    __builtin_prefetch(source.prim_ids + hit.prim_id);
+                    if (const std::optional<PrimId> id =
+                            object_traversal_detail::row_prim_id(lanes, group_hit.index)) {
+                        hit.prim_id = *id;
+                        hit_prim_ids = nullptr;
+                    } else {
+                        hit.prim_id = position;
+                        hit_prim_ids = source.prim_ids;
+                        __builtin_prefetch(source.prim_ids + position);
+                    }
                     if (located != nullptr) {
-                        located->leaf_position = hit.prim_id;
+                        located->leaf_position = position;
                         located->corners = lanes.corners(group_hit.index);
                         located->has_moller_terms = moller_terms_computed<kTest>();
                         closer_hit_notifier(observer, source.instance)(*located);

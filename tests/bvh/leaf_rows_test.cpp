@@ -33,12 +33,12 @@ void collect_leaves(const ObjectBvh& bvh, NodeRef ref, std::vector<NodeRef>& lea
         if (!child.is_empty()) collect_leaves(bvh, child, leaves);
 }
 
-TEST(LeafRows, HoldEachLeafsCornersAxisByAxisAfterPadding) {
+TEST(LeafRows, HoldEachLeafsCornersAxisByAxisThenItsPrimIdsAfterPadding) {
     BuildSettings settings;
     settings.max_leaf_size = 8;
     const Mesh mesh = make_torus_knot();
     const ObjectBvh bvh = build_object_bvh(mesh, settings);
-    ASSERT_EQ(bvh.leaf_rows.size(), 9 * bvh.triangles.size() + 2 * kLeafRowPadding);
+    ASSERT_EQ(bvh.leaf_rows.size(), 10 * bvh.triangles.size() + 2 * kLeafRowPadding);
     std::vector<NodeRef> leaves;
     collect_leaves(bvh, bvh.root, leaves);
     std::size_t checked = 0, wider_than_one = 0;
@@ -51,10 +51,14 @@ TEST(LeafRows, HoldEachLeafsCornersAxisByAxisAfterPadding) {
             for (int c = 0; c < 3; ++c)
                 for (int a = 0; a < 3; ++a) {
                     const float row_value =
-                        bvh.leaf_rows[kLeafRowPadding + 9 * first + (3 * c + a) * count + i];
+                        bvh.leaf_rows[kLeafRowPadding + 10 * first + (3 * c + a) * count + i];
                     ASSERT_EQ(row_value, corners[c][a]) << "leaf at " << first << ", triangle " << i
                                                         << ", corner " << c << ", axis " << a;
                 }
+            // Row 9: the primID's bits.
+            const float id_value = bvh.leaf_rows[kLeafRowPadding + 10 * first + 9 * count + i];
+            ASSERT_EQ(std::bit_cast<PrimId>(id_value), bvh.prim_ids[first + i])
+                << "leaf at " << first << ", triangle " << i;
             ++checked;
         }
     }
@@ -70,12 +74,13 @@ TEST(LeafRows, RewritingInPlaceKeepsTheBufferAndRefusesAWrongSize) {
     const ObjectBvh bvh = build_object_bvh(make_torus_knot(), {});
     std::vector<float> rows(bvh.leaf_rows.size(), -1.0f);
     const float* address = rows.data();
-    rewrite_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, rows);
+    rewrite_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, bvh.prim_ids, rows);
     EXPECT_EQ(rows.data(), address);
     for (std::size_t i = kLeafRowPadding; i < rows.size() - kLeafRowPadding; ++i)
         ASSERT_EQ(rows[i], bvh.leaf_rows[i]) << i;
     std::vector<float> short_rows(rows.size() - 1);
-    EXPECT_THROW(rewrite_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, short_rows), Error);
+    EXPECT_THROW(rewrite_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, bvh.prim_ids, short_rows),
+                 Error);
 }
 
 /// Hits equal to the last bit, and the same occlusion answers.

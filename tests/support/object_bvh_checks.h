@@ -134,7 +134,7 @@ inline void expect_valid(const Mesh& mesh, const ObjectBvh& bvh) {
     }
     // The pre-arranged rows the SIMD kernels read are in step with the corners and leaves.
     if (bvh.leaf_rows.empty()) return;  // BuildSettings::pre_arranged_leaves off
-    EXPECT_TRUE(bvh.leaf_rows == make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles))
+    EXPECT_TRUE(bvh.leaf_rows == make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, bvh.prim_ids))
         << "leaf rows out of step with the triangles or the leaves";
 }
 
