@@ -40,7 +40,7 @@ public:
         }
     }
     std::uint32_t count() const { return count_; }
-    /// The 9 rows of the gathered triangles (lanes past count() hold arbitrary values).
+    /// The 9 corner rows of the gathered triangles (lanes past count() hold arbitrary values).
     void load_rows(__m256 (&rows)[9]) const {
         const Segment& first = segments_[0];  // starts at lane 0
         for (std::uint32_t r = 0; r < kCornerRows; ++r)
