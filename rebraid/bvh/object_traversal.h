@@ -115,8 +115,6 @@ constexpr bool moller_terms_computed() {
 #endif
 }
 
-namespace object_traversal_detail {
-
 /// The primID of the triangle in `lane` where the lanes' storage holds it (leaf rows).
 template <class Lanes>
 std::optional<PrimId> row_prim_id([[maybe_unused]] const Lanes& lanes,
@@ -126,6 +124,8 @@ std::optional<PrimId> row_prim_id([[maybe_unused]] const Lanes& lanes,
     else
         return std::nullopt;
 }
+
+namespace object_traversal_detail {
 
 /// intersect_object_bvh_leaf_order with `lanes` gathering the leaves' triangles.
 template <TriangleTest kTest, class Lanes, class HitDataPrefetch>

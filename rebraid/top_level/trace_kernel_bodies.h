@@ -382,8 +382,7 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
                     hit.v = group_hit.v;
                     const std::uint32_t position = lanes.position(group_hit.index);
                     hit.instance_id = source.instance;
-                    if (const std::optional<PrimId> id =
-                            object_traversal_detail::row_prim_id(lanes, group_hit.index)) {
+                    if (const std::optional<PrimId> id = row_prim_id(lanes, group_hit.index)) {
                         hit.prim_id = *id;
                         hit_prim_ids = nullptr;
                     } else {
