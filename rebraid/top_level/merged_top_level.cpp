@@ -197,11 +197,8 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
             merged.nodes[slot.node].children[slot.slot] = NodeRef::inner(first_node[i]);
         }
     });
-    for (const MergedLeafSource& source : merged.sources) {
+    for (const MergedLeafSource& source : merged.sources)
         merged.every_source_has_rows = merged.every_source_has_rows && source.leaf_rows != nullptr;
-        merged.has_placed_sources =
-            merged.has_placed_sources || source.space != InstanceTarget::kWorldSpace;
-    }
     merged.root = top.root;
     return merged;
 }

@@ -71,8 +71,6 @@ struct MergedTopLevel {
     std::vector<MergedLeafSource> sources;
     /// Every source has pre-arranged rows: the SIMD kernels read rows only (one loop).
     bool every_source_has_rows = true;
-    /// Some source is in an object space (its leaves take a mapped ray).
-    bool has_placed_sources = false;
     /// The top level's root; empty when nothing was merged (traversal takes the top level).
     NodeRef root = NodeRef::empty();
 

@@ -328,6 +328,16 @@ struct MergedLeafVisitor {
     bool operator()(NodeRef leaf) { return items(leaf); }
 };
 
+/// The ray the triangles of merged `source` are tested with: the world ray, or for a placed
+/// instance's subtree the ray mapped into its space (ObjectRayCache). The source's own copy of
+/// the space decides, so a world-space source never reads its instance's record.
+inline const TriangleGroupRay& source_triangle_ray(const MergedLeafSource& source,
+                                                   PreparedRay& world_ray,
+                                                   ObjectRayCache& object_rays) {
+    if (source.space == InstanceTarget::kWorldSpace) return world_ray.triangle_ray;
+    return object_rays.ray_for(*source.target).triangle_ray;
+}
+
 /// Lanes over the leaves of `source`: its rows (LeafRowLanes) or its corners.
 template <class Lanes>
 Lanes source_lanes(const MergedLeafSource& source) {
@@ -368,9 +378,7 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
                                        unsigned slots) {
             Lanes lanes = source_lanes<Lanes>(source);
             const TriangleGroupRay& source_ray =
-                source.space == InstanceTarget::kWorldSpace
-                    ? world_ray.triangle_ray
-                    : object_rays.ray_for(*source.target).triangle_ray;
+                source_triangle_ray(source, world_ray, object_rays);
             const auto test_lanes = [&] {
                 TriangleGroupHit group_hit;
                 if (lanes.template intersect<kTest>(
@@ -429,9 +437,7 @@ template <TriangleTest kTest>
                                        unsigned slots) {
             Lanes lanes = source_lanes<Lanes>(source);
             const TriangleGroupRay& source_ray =
-                source.space == InstanceTarget::kWorldSpace
-                    ? world_ray.triangle_ray
-                    : object_rays.ray_for(*source.target).triangle_ray;
+                source_triangle_ray(source, world_ray, object_rays);
             bool is_occluded = false;
             const auto test_lanes = [&] {
                 is_occluded =
