@@ -7,10 +7,15 @@
 // With several ray files, --dump-after='*trace_all*' writes one profile per file, so one
 // build (emulated slowly by valgrind) serves them all (bench/tools/count_instructions.py).
 // ACCEL: a structure as `rebraid bench --accel` names one, variants included
-// (`rebraid:budget-factor=16`).
+// (`rebraid:budget-factor=16`). With --count-work first, each line also gives the nodes,
+// triangles and object entries per closest-hit query (TraversalCounters), from a second pass
+// after each file's trace_all, so callgrind's counts of trace_all stay as they are only when it
+// is left out.
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "accel_factory.h"
@@ -39,11 +44,25 @@ struct TraceSummary {
     return summary;
 }
 
+/// Work per closest-hit query over `rays` (the structure's own counters; zero for structures
+/// that keep none, such as Embree's).
+rebraid::TraversalCounters count_work(const rebraid::Accel& accel,
+                                      const std::vector<rebraid::Ray>& rays) {
+    rebraid::TraversalCounters counters;
+    for (const rebraid::Ray& ray : rays) accel.intersect_counted(ray, &counters);
+    return counters;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+    const bool counts_work = argc > 1 && std::string_view(argv[1]) == "--count-work";
+    if (counts_work) {
+        --argc;
+        ++argv;
+    }
     if (argc < 4) {
-        std::fprintf(stderr, "usage: trace_rays SCENE|default RAYS... ACCEL\n");
+        std::fprintf(stderr, "usage: trace_rays [--count-work] SCENE|default RAYS... ACCEL\n");
         return 1;
     }
     try {
@@ -57,8 +76,16 @@ int main(int argc, char** argv) {
         const std::unique_ptr<rebraid::Accel> accel = rebraid::cli::build_accel(argv[argc - 1], scene);
         for (const std::vector<rebraid::Ray>& rays : ray_sets) {
             const TraceSummary summary = trace_all(*accel, rays);
-            std::printf("%zu rays, %zu hits, %zu occluded, t sum %.9g\n", rays.size(), summary.hits,
+            std::printf("%zu rays, %zu hits, %zu occluded, t sum %.9g", rays.size(), summary.hits,
                         summary.occluded, summary.t_sum);
+            if (counts_work) {
+                const rebraid::TraversalCounters work = count_work(*accel, rays);
+                const double n = double(std::max<std::size_t>(rays.size(), 1));
+                std::printf(", per ray %.3f nodes %.3f triangles %.3f entries",
+                            double(work.nodes_visited) / n, double(work.triangles_tested) / n,
+                            double(work.object_entries) / n);
+            }
+            std::printf("\n");
         }
     } catch (const std::exception& error) {
         std::fprintf(stderr, "trace_rays: %s\n", error.what());
