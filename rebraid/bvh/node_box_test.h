@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 
 #include "rebraid/bvh/traversal_ray.h"
 #include "rebraid/bvh/wide_node.h"
@@ -27,19 +28,22 @@ public:
     explicit NodeBoxTest(const TraversalRay& ray) : planes_(&ray.plane_offsets()) {
         for (int a = 0; a < 3; ++a) {
             org_[a] = _mm256_set1_ps(ray.org[a]);
-            rdir_[a] = _mm256_set1_ps(ray.rdir[a]);
+            negated_rdir_[a] = _mm256_set1_ps(-ray.rdir[a]);
         }
     }
 
     /// Mask of the children the ray enters within [tnear, tfar], with every child's entry
-    /// distance in `distances` (32-byte aligned). (plane - org) * rdir rather than a fused
-    /// multiply-add: the product of a far-away origin and rdir would cost the precision the
-    /// robust bound relies on.
+    /// distance in `distances` (32-byte aligned). The distance to a plane is (plane - org) *
+    /// rdir rather than a fused multiply-add: the product of a far-away origin and rdir would
+    /// cost the precision the robust bound relies on. It is taken as (org - plane) * -rdir,
+    /// which reads the plane straight into the subtraction (no load of its own): the same
+    /// number but for the sign of a zero (a plane at the origin's coordinate), and the entry distance
+    /// never shows that sign, since the max with tnear, the last operand, keeps tnear on ties.
     unsigned operator()(const WideNode& node, float tnear, float tfar, float* distances) const {
         const char* base = reinterpret_cast<const char*>(&node);
         const auto slab = [&](std::uint32_t offset, int axis) {
             const __m256 plane = _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
-            return _mm256_mul_ps(_mm256_sub_ps(plane, org_[axis]), rdir_[axis]);
+            return _mm256_mul_ps(_mm256_sub_ps(org_[axis], plane), negated_rdir_[axis]);
         };
         const __m256 near_x = slab(planes_->near[0], 0), far_x = slab(planes_->far[0], 0);
         const __m256 near_y = slab(planes_->near[1], 1), far_y = slab(planes_->far[1], 1);
@@ -55,7 +59,7 @@ public:
 
 private:
     __m256 org_[3];
-    __m256 rdir_[3];
+    __m256 negated_rdir_[3];
     const SlabPlaneOffsets* planes_;
 };
 
