@@ -37,8 +37,9 @@ public:
     /// rdir rather than a fused multiply-add: the product of a far-away origin and rdir would
     /// cost the precision the robust bound relies on. It is taken as (org - plane) * -rdir,
     /// which reads the plane straight into the subtraction (no load of its own): the same
-    /// number but for the sign of a zero (a plane at the origin's coordinate), and the entry distance
-    /// never shows that sign, since the max with tnear, the last operand, keeps tnear on ties.
+    /// number but for the sign of a zero (a plane at the origin's coordinate), and the entry
+    /// distance never shows that sign, since the max with tnear, the last operand, keeps tnear on
+    /// ties.
     unsigned operator()(const WideNode& node, float tnear, float tfar, float* distances) const {
         const char* base = reinterpret_cast<const char*>(&node);
         const auto slab = [&](std::uint32_t offset, int axis) {
