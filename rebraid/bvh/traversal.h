@@ -47,7 +47,7 @@ enum class LeafVisits {
     by_node,
 };
 
-/// Asks the cache for the node `ref` names (all four lines of its 224 bytes).
+/// Asks the cache for the node `ref` names (all four of its cache lines).
 inline void prefetch_node(const WideNode* nodes, NodeRef ref) {
     const char* base = reinterpret_cast<const char*>(nodes + ref.node_id());
     for (int offset = 0; offset < int(sizeof(WideNode)); offset += 64)
