@@ -13,8 +13,8 @@ namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
 // The box-test kernels of traverse_bvh. Each comes in the SIMD level the library is compiled
-// for (simd_config.h) and a portable form with the same results; the traversal loop itself
-// never names an ISA.
+// for (simd_config.h) and a portable form: the same hits (at the robust bound's margin their
+// rounding may differ by an ulp); the traversal loop itself never names an ISA.
 
 /// The far distance of a slab test is scaled up by 1 + 2*gamma(3) (Ize 2013) so rounding can
 /// never reject a box the ray touches.
