@@ -105,10 +105,29 @@ public:
         return *ray_;
     }
 
+    /// The ray in `target`'s space for triangle tests alone (the leaves of a merged placed
+    /// instance, whose boxes are in world space): the same mapped origin and direction as
+    /// ray_for's, without the reciprocals and box-test values only a traversal in that space
+    /// reads.
+    const TriangleGroupRay& triangle_ray_for(const InstanceTarget& target) {
+        if (target.space == InstanceTarget::kWorldSpace) return world_ray_.triangle_ray;
+        if (target.space == space_) return ray_->triangle_ray;
+        if (target.space != triangle_space_) {
+            const TraversalRay& world = world_ray_.ray;
+            Vec3f org, dir;
+            map_into_object_space(target.to_object, world.org, world.dir, org, dir);
+            triangle_ray_.emplace(org, dir);
+            triangle_space_ = target.space;
+        }
+        return *triangle_ray_;
+    }
+
 private:
     PreparedRay& world_ray_;
     std::uint32_t space_ = InstanceTarget::kWorldSpace;
     std::optional<PreparedRay> ray_;
+    std::uint32_t triangle_space_ = InstanceTarget::kWorldSpace;
+    std::optional<TriangleGroupRay> triangle_ray_;
 };
 
 /// What a leaf item of `top` may be (StartLeaf): part of a leaf only where opening split leaves.
@@ -335,7 +354,7 @@ inline const TriangleGroupRay& source_triangle_ray(const MergedLeafSource& sourc
                                                    PreparedRay& world_ray,
                                                    ObjectRayCache& object_rays) {
     if (source.space == InstanceTarget::kWorldSpace) return world_ray.triangle_ray;
-    return object_rays.ray_for(*source.target).triangle_ray;
+    return object_rays.triangle_ray_for(*source.target);
 }
 
 /// Lanes over the leaves of `source`: its rows (LeafRowLanes) or its corners.
