@@ -9,8 +9,8 @@
 // ACCEL: a structure as `rebraid bench --accel` names one, variants included
 // (`rebraid:budget-factor=16`). With --count-work first, each line also gives the nodes,
 // triangles and object entries per closest-hit query (TraversalCounters), from a second pass
-// after each file's trace_all, so callgrind's counts of trace_all stay as they are only when it
-// is left out.
+// after each file's trace_all; callgrind would count that pass with the next file's
+// trace_all, so leave the option out when counting instructions.
 #include <algorithm>
 #include <cstdio>
 #include <memory>
