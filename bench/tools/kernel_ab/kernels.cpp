@@ -10,33 +10,40 @@ namespace kernel_ab {
 
 using namespace rebraid;
 
-/// Closest hits of `rays` through the kernels this copy was compiled with (the flat query,
-/// the merged or the general instanced one, located when asked, as the Embree glue asks);
-/// returns the seconds taken and the sum of the hits' t in `t_sum`.
+/// Every ray's closest hit through the instanced query `closest_hit`, plain or located.
+template <auto closest_hit>
+double sum_instanced_hits(const InstancedAccel& accel, const std::vector<Ray>& rays, bool located) {
+    double sum = 0.0;
+    for (const Ray& ray : rays) {
+        const Hit hit = located ? intersect_located_entry<closest_hit>(accel, ray, nullptr).hit
+                                : intersect_entry<closest_hit>(accel, ray, nullptr);
+        if (hit.is_hit()) sum += hit.t;
+    }
+    return sum;
+}
+
+/// Closest hits of `rays` through the kernels this copy was compiled with: the query the
+/// structure takes (as InstancedAccel::use_kernels chooses it: one item, merged, or the
+/// general one; the flat query for a flat structure), located when asked, as the Embree glue
+/// asks. Returns the seconds taken and the sum of the hits' t in `t_sum`.
 double KERNEL_AB_RUN(const FlatAccel* flat, const InstancedAccel* instanced,
                      const std::vector<Ray>& rays, bool located, double& t_sum) {
     constexpr TriangleTest kTest = TriangleTest::moller;
     const auto start = std::chrono::steady_clock::now();
-    double sum = 0.0;
-    const auto add = [&sum](const Hit& hit) {
-        if (hit.is_hit()) sum += hit.t;
-    };
     if (flat != nullptr) {
-        for (const Ray& ray : rays) add(flat_intersect<kTest>(*flat, ray, nullptr));
+        t_sum = 0.0;
+        for (const Ray& ray : rays) {
+            const Hit hit = flat_intersect<kTest>(*flat, ray, nullptr);
+            if (hit.is_hit()) t_sum += hit.t;
+        }
+    } else if (const NodeRef root = instanced->top_level().root;
+               root.is_leaf() && root.prim_count() == 1) {
+        t_sum = sum_instanced_hits<&sole_item_closest_hit<kTest>>(*instanced, rays, located);
     } else if (!instanced->merged_top_level().empty()) {
-        for (const Ray& ray : rays)
-            add(located
-                    ? intersect_located_entry<&merged_closest_hit<kTest>>(*instanced, ray, nullptr)
-                          .hit
-                    : intersect_entry<&merged_closest_hit<kTest>>(*instanced, ray, nullptr));
+        t_sum = sum_instanced_hits<&merged_closest_hit<kTest>>(*instanced, rays, located);
     } else {
-        for (const Ray& ray : rays)
-            add(located ? intersect_located_entry<&instanced_closest_hit<kTest>>(*instanced, ray,
-                                                                                 nullptr)
-                              .hit
-                        : intersect_entry<&instanced_closest_hit<kTest>>(*instanced, ray, nullptr));
+        t_sum = sum_instanced_hits<&instanced_closest_hit<kTest>>(*instanced, rays, located);
     }
-    t_sum = sum;
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
