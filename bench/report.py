@@ -154,7 +154,10 @@ def section_setup(results, runs):
     for m, suites in machines.values():
         simd = ", ".join(s.upper().replace("_", ".") for s in m.get("simd") or [])
         where = f" ({', '.join(sorted(suites))})" if len(machines) > 1 else ""
-        out.append(f"- **Machine{where}:** {m.get('cpu') or 'unknown CPU'}, "
+        cpu = m.get("cpu") or "unknown CPU"
+        if m.get("cpu_family_model"):
+            cpu += f" ({m['cpu_family_model']})"
+        out.append(f"- **Machine{where}:** {cpu}, "
                    f"{m.get('logical_cores', '?')} logical cores"
                    + (f" ({simd})" if simd else "")
                    + f", {m.get('memory_gib', '?')} GiB memory, {m.get('kernel', '?')}.")

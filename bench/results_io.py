@@ -143,10 +143,16 @@ def machine_info(binary=BINARY):
     model = re.search(r"^model name\s*:\s*(.*)$", cpuinfo, re.MULTILINE)
     flags = re.search(r"^flags\s*:\s*(.*)$", cpuinfo, re.MULTILINE)
     memory = re.search(r"^MemTotal:\s*(\d+)\s*kB", _read("/proc/meminfo"), re.MULTILINE)
+    family = re.search(r"^cpu family\s*:\s*(\d+)$", cpuinfo, re.MULTILINE)
+    model_number = re.search(r"^model\s*:\s*(\d+)$", cpuinfo, re.MULTILINE)
     uname = platform.uname()
     flag_set = set(flags.group(1).split()) if flags else set()
     return {
         "cpu": model.group(1).strip() if model else platform.processor() or None,
+        # A virtual machine's model name may not tell one generation from another (both
+        # "AMD EPYC"); family and model do.
+        "cpu_family_model": (f"family {family.group(1)}, model {model_number.group(1)}"
+                             if family and model_number else None),
         "logical_cores": os.cpu_count(),
         "simd": [f for f in ("sse4_2", "avx", "avx2", "avx512f") if f in flag_set],
         "memory_gib": round(int(memory.group(1)) / 1024 ** 2, 1) if memory else None,
