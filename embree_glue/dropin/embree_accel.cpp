@@ -37,14 +37,14 @@ ObjectBvhBuilder make_object_builder(const EmbreeAccelSettings& settings) {
     return own_object_bvh_builder(settings.own_builder);
 }
 
-bool is_ray_mask_supported(RTCScene scene) {
+/// rtcGetDeviceProperty of the scene's device (0 without one).
+ssize_t scene_device_property(RTCScene scene, RTCDeviceProperty property) {
     // rtcGetSceneDevice adds a reference to the device.
     const RTCDevice device = rtcGetSceneDevice(scene);
-    if (device == nullptr) return false;
-    const bool is_supported =
-        rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+    if (device == nullptr) return 0;
+    const ssize_t value = rtcGetDeviceProperty(device, property);
     rtcReleaseDevice(device);
-    return is_supported;
+    return value;
 }
 
 /// Same meshes (geometries, triangles, vertex counts) and same instances (geometries, ids,
@@ -124,7 +124,12 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
     : scene_(scene), settings_(settings) {
     settings_.validate();
     if (scene_ == nullptr) throw Error("EmbreeAccel: the scene is null");
-    is_ray_mask_supported_ = is_ray_mask_supported(scene_);
+    is_ray_mask_supported_ =
+        scene_device_property(scene_, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+    has_native_packets8_ =
+        scene_device_property(scene_, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
+    has_native_packets16_ =
+        scene_device_property(scene_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
     arithmetic_ = glue::detect_embree_kernel_arithmetic();
     converted_ = convert_now();
     embree_world_to_object_ = embree_world_to_object_maps(converted_.scene);

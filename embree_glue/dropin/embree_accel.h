@@ -115,6 +115,15 @@ public:
     /// rtcOccluded1: sets ray.tfar to -inf when any hit exists in [tnear, tfar], else leaves
     /// the ray untouched. Same ray conventions as intersect1.
     void occluded1(RTCRay& ray) const noexcept;
+    /// Whether Embree traces packets of `width` rays (4, 8 or 16) with packet kernels of its
+    /// own on the scene's device (rtcGetDeviceProperty RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED
+    /// and RAY16; packets of 4 always). Where not, Embree 3 traces an 8- or 16-ray packet as a
+    /// stream, whose lanes are active when tnear <= tfar whatever the valid mask says (a CPU
+    /// without AVX-512 has no 16-wide kernels): the preload answers such packets that way too.
+    bool has_native_packets(unsigned int width) const noexcept {
+        return width == 4 || (width == 8 && has_native_packets8_) ||
+               (width == 16 && has_native_packets16_);
+    }
 
     /// After the application changed vertex buffers or instance transforms (or anything else)
     /// and committed: converts the scene again, updates the object BVHs of meshes whose
@@ -153,6 +162,8 @@ private:
     EmbreeAccelSettings settings_;
     ObjectBvhBuilder object_builder_;
     bool is_ray_mask_supported_ = false;
+    bool has_native_packets8_ = false;
+    bool has_native_packets16_ = false;
     /// How Embree rounds on this machine: the hit attributes are computed the same way.
     glue::EmbreeKernelArithmetic arithmetic_ = glue::EmbreeKernelArithmetic::separate;
     /// The structure's queries give Embree's own Möller terms (a SIMD kernel, the Möller

@@ -2,8 +2,8 @@
 // rebraid serves the scene; if not, or when the call carries an intersection filter in its
 // context (which only Embree can call at the right moments), it forwards to Embree unchanged.
 // Packets and streams are answered ray by ray with Embree's conventions: a packet's lanes
-// whose valid entry is not -1 are left untouched, and in streams a ray with tnear > tfar is
-// inactive.
+// whose valid entry is not -1 are left untouched (where Embree has packet kernels of that width;
+// else it traces the packet as a stream), and in streams a ray with tnear > tfar is inactive.
 
 #include <embree3/rtcore.h>
 
@@ -79,8 +79,16 @@ void occlude_lane(const EmbreeAccel& accel, RTCRayN* rays, unsigned int n, unsig
     RTCRayN_tfar(rays, n, i) = ray.tfar;
 }
 
+/// The lanes of a packet of `n` rays Embree traces: those `valid` marks -1 where Embree has
+/// packet kernels of that width, else (it traces the packet as a stream) every lane, each
+/// then active when tnear <= tfar (EmbreeAccel::has_native_packets). Null: every lane.
+const int* active_lanes(const EmbreeAccel& accel, const int* valid, unsigned int n) {
+    return accel.has_native_packets(n) ? valid : nullptr;
+}
+
 template <typename Packet>
 void intersect_packet(const EmbreeAccel& accel, const int* valid, Packet* packet, unsigned int n) {
+    valid = active_lanes(accel, valid, n);
     for (unsigned int i = 0; i < n; ++i)
         if (valid == nullptr || valid[i] == -1)
             intersect_lane(accel, reinterpret_cast<RTCRayHitN*>(packet), n, i);
@@ -88,6 +96,7 @@ void intersect_packet(const EmbreeAccel& accel, const int* valid, Packet* packet
 
 template <typename Packet>
 void occlude_packet(const EmbreeAccel& accel, const int* valid, Packet* packet, unsigned int n) {
+    valid = active_lanes(accel, valid, n);
     for (unsigned int i = 0; i < n; ++i)
         if (valid == nullptr || valid[i] == -1)
             occlude_lane(accel, reinterpret_cast<RTCRayN*>(packet), n, i);
