@@ -40,6 +40,8 @@ public:
         }
     }
     std::uint32_t count() const { return count_; }
+    /// The rows of the BVH's leaves (leaf_rows_at's base).
+    const float* rows() const { return rows_; }
     /// The 9 corner rows of the gathered triangles (lanes past count() hold arbitrary values).
     void load_rows(__m256 (&rows)[9]) const {
         const Segment& first = segments_[0];  // starts at lane 0

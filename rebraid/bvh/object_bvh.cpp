@@ -1,5 +1,7 @@
 #include "rebraid/bvh/object_bvh.h"
 
+#include "rebraid/bvh/leaf_row_hints.h"
+#include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/object_subtree_counts.h"
 
 namespace rebraid {
@@ -14,7 +16,13 @@ void ObjectBvh::refresh_node_prim_counts() {
 }
 
 void ObjectBvh::refresh_leaf_rows() {
-    if (!leaf_rows.empty()) rewrite_leaf_rows(nodes, root, triangles, prim_ids, leaf_rows);
+    if (leaf_rows.empty()) return;
+    rewrite_leaf_rows(nodes, root, triangles, prim_ids, leaf_rows);
+    refresh_leaf_row_hints();
+}
+
+void ObjectBvh::refresh_leaf_row_hints() {
+    if (!leaf_rows.empty()) write_leaf_row_hints(nodes);
 }
 
 }  // namespace rebraid

@@ -33,6 +33,9 @@ struct ObjectBvh {
     /// Writes leaf_rows again from `triangles` and the current leaves, in place (when made):
     /// what an update that regroups leaves calls last.
     void refresh_leaf_rows();
+    /// Writes the nodes' leaf-row hints again (leaf_row_hints.h; when leaf_rows are made):
+    /// what an update that regroups nodes calls last. refresh_leaf_rows() calls it.
+    void refresh_leaf_row_hints();
     /// Counts node_prim_counts again from the current nodes (when counted): what an update
     /// that regroups nodes calls last.
     void refresh_node_prim_counts();

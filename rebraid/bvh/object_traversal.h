@@ -155,8 +155,12 @@ bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pr
         add_leaves_and_test(lanes, refs, slots, counters, test_lanes, [] { return false; });
         return false;
     };
-    traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(nodes, start, prepared,
-                                                                           counters, visit_leaves);
+    if constexpr (requires { lanes.rows(); })
+        traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
+            nodes, start, prepared, counters, visit_leaves, LeafRowsPrefetch{lanes.rows()});
+    else
+        traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
+            nodes, start, prepared, counters, visit_leaves);
     return found;
 }
 

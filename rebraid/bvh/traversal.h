@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "rebraid/bvh/leaf_row_hints.h"
+#include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/node_box_test.h"
 #include "rebraid/bvh/prepared_ray.h"
 #include "rebraid/bvh/wide_node.h"
@@ -59,6 +61,25 @@ struct NoLeafPrefetch {
     void operator()(NodeRef) const {}
 };
 
+/// A leaf prefetcher for object BVHs with leaf rows: as a closest-hit traversal descends into
+/// an inner child, it asks for the rows of that child's leaf children (WideNode::
+/// leaf_row_hints), whose misses then overlap the child's own instead of following its box
+/// test. Stacked children are not asked for (measured: less gain on the default scene).
+struct LeafRowsPrefetch {
+    const float* rows;
+    void operator()(NodeRef) const {}
+    void rows_of_child(NodeRef, std::uint32_t hint) const {
+        const std::uint32_t lines = hint >> kLeafRowHintLineShift;
+        // Computed as an integer, so that no pointer past the rows is ever formed; a prefetch
+        // never faults.
+        const std::uintptr_t first =
+            reinterpret_cast<std::uintptr_t>(rows) +
+            sizeof(float) * kRowFloatsPerTriangle * std::uintptr_t(hint & NodeRef::kMaxFirst);
+        for (std::uint32_t line = 0; line < lines; ++line)
+            __builtin_prefetch(reinterpret_cast<const void*>(first + 64 * line));
+    }
+};
+
 /// Depth-first traversal of the wide BVH `nodes` from `start` (any node, or a leaf
 /// reference) for a ray prepared in the BVH's space. `visit_leaf` tests leaves' primitives
 /// (one leaf or several, see LeafVisits), shrinking prepared.ray.tfar on hits, and returns true to
@@ -75,6 +96,9 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                   LeafPrefetcher&& prefetch_leaf = {}) {
     constexpr bool kWithSiblings = leaf_visits == LeafVisits::with_siblings;
     constexpr bool kByNode = leaf_visits == LeafVisits::by_node;
+    constexpr bool kPrefetchesRows = requires {
+        prefetch_leaf.rows_of_child(NodeRef(), 0u);
+    };
     if constexpr (kWithSiblings) {
         if (start.is_leaf()) return visit_leaf(&start, 1u);
     }
@@ -135,6 +159,8 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
             mask &= mask - 1;
             if (mask == 0) {  // one child hit: descend without touching the stack
                 current = node.children[first];
+                if constexpr (kPrefetchesRows)
+                    prefetch_leaf.rows_of_child(current, node.leaf_row_hints[first]);
                 continue;
             }
             if constexpr (order == TraversalOrder::any) {
@@ -154,6 +180,8 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                 const int far_slot = first_is_near ? second : first;
                 stack[stack_size++] = make_entry(node.children[far_slot], distances[far_slot]);
                 current = node.children[near_slot];
+                if constexpr (kPrefetchesRows)
+                    prefetch_leaf.rows_of_child(current, node.leaf_row_hints[near_slot]);
                 continue;
             }
             // Three or more: push them all, sort the pushed run far to near (insertion sort,

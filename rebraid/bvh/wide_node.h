@@ -58,7 +58,10 @@ struct alignas(64) WideNode {
     float lower_y[kBvhWidth], upper_y[kBvhWidth];
     float lower_z[kBvhWidth], upper_z[kBvhWidth];
     NodeRef children[kBvhWidth];
-    std::uint32_t unused[kBvhWidth] = {};  // zero, so that equal nodes compare equal bytewise
+    /// Per inner child, where its leaf children's rows start (leaf_row_hints.h), else 0;
+    /// written for object BVHs with leaf rows, zero elsewhere (zeroed so that equal nodes
+    /// compare equal bytewise).
+    std::uint32_t leaf_row_hints[kBvhWidth] = {};
 
     /// A node with every slot unused.
     static WideNode make_empty() {

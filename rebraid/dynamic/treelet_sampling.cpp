@@ -401,7 +401,10 @@ TreeletStats TreeletSampler::optimize(const Mesh& mesh, ObjectBvh& bvh,
         stats.nodes_rebuilt += treelet.inner_ids.size();
     }
     stats.sah = (tree_cost + cost_change) / root_area;
-    if (stats.applied > 0) bvh.refresh_node_prim_counts();  // treelets regroup the nodes
+    if (stats.applied > 0) {  // treelets regroup the nodes (the leaves stay)
+        bvh.refresh_node_prim_counts();
+        bvh.refresh_leaf_row_hints();
+    }
     return stats;
 }
 

@@ -7,6 +7,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/bvh/vertex_world_bounds.h"
 #include "rebraid/core/huge_pages.h"
 
@@ -195,6 +196,8 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
                 fit_world_boxes(merged, first_node[i], bvh,
                                 object_to_world[slot.item->instance_id]);
             merged.nodes[slot.node].children[slot.slot] = NodeRef::inner(first_node[i]);
+            merged.nodes[slot.node].leaf_row_hints[slot.slot] =
+                leaf_row_hint(merged.nodes[first_node[i]]);
         }
     });
     for (const MergedLeafSource& source : merged.sources)

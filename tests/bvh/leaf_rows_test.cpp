@@ -8,6 +8,7 @@
 #include <set>
 #include <vector>
 
+#include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/object_bvh_builder.h"
 #include "rebraid/core/error.h"
@@ -18,6 +19,7 @@
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instanced_accel.h"
+#include "rebraid/top_level/merged_top_level.h"
 #include "support/hit_comparison.h"
 
 namespace rebraid {
@@ -81,6 +83,77 @@ TEST(LeafRows, RewritingInPlaceKeepsTheBufferAndRefusesAWrongSize) {
     std::vector<float> short_rows(rows.size() - 1);
     EXPECT_THROW(rewrite_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, bvh.prim_ids, short_rows),
                  Error);
+}
+
+// Each inner child's hint names the rows of its first leaf child and of the leaf children that
+// follow it in leaf order, in whole cache lines up to the cap; children that are leaves, empty
+// or without leaf children have none.
+TEST(LeafRows, HintsNameTheRowsOfEachInnerChildsLeafChildren) {
+    const ObjectBvh bvh = build_object_bvh(make_torus_knot(), {});
+    std::size_t hinted = 0, capped = 0;
+    for (const WideNode& node : bvh.nodes)
+        for (int slot = 0; slot < kBvhWidth; ++slot) {
+            const std::uint32_t hint = node.leaf_row_hints[slot];
+            const NodeRef child = node.children[slot];
+            if (!child.is_inner()) {
+                EXPECT_EQ(hint, 0u);
+                continue;
+            }
+            std::uint32_t first = 0, end = 0;
+            for (const NodeRef grandchild : bvh.nodes[child.node_id()].children) {
+                if (!grandchild.is_leaf()) continue;
+                if (end == 0) {
+                    first = grandchild.first_prim();
+                    end = first + grandchild.prim_count();
+                } else if (grandchild.first_prim() == end) {
+                    end += grandchild.prim_count();
+                } else {
+                    break;
+                }
+            }
+            if (end == 0) {
+                EXPECT_EQ(hint, 0u);
+                continue;
+            }
+            ++hinted;
+            EXPECT_EQ(hint & NodeRef::kMaxFirst, first);
+            const std::uint32_t lines = hint >> kLeafRowHintLineShift;
+            const std::uint32_t bytes = (end - first) * kRowFloatsPerTriangle * sizeof(float);
+            EXPECT_GE(lines, 1u);
+            EXPECT_LE(lines, kMaxLeafRowHintLines);
+            if (lines < kMaxLeafRowHintLines)
+                EXPECT_GE(64 * lines, bytes);  // every row, from anywhere in the first line
+            else
+                ++capped;
+        }
+    EXPECT_GT(hinted, bvh.nodes.size() / 2);
+    EXPECT_LT(capped, hinted);
+}
+
+// A merged top level hints the rows of the object subtrees it hangs in: the slot holding a
+// copied subtree's root carries that root's hint, and copied nodes keep theirs.
+TEST(LeafRows, MergedTopLevelsHintTheRowsOfTheSubtreesTheyHangIn) {
+    RebraidSettings settings;
+    settings.world_space_single_instances = false;
+    settings.world_space_copy_budget = 0.0f;
+    settings.merge_placed_instances = true;
+    settings.merge_placed_node_budget = 1000.0f;
+    const Scene scene = make_default_scene();
+    const InstancedAccel accel = build_rebraid_accel(scene, own_object_bvh_builder(), settings);
+    const MergedTopLevel& merged = accel.merged_top_level();
+    ASSERT_LT(merged.first_object_node, merged.nodes.size());
+    std::size_t roots = 0, checked = 0;
+    for (std::size_t n = 0; n < merged.nodes.size(); ++n)
+        for (int slot = 0; slot < kBvhWidth; ++slot) {
+            const NodeRef child = merged.nodes[n].children[slot];
+            if (!child.is_inner() || !merged.is_object_node(child.node_id())) continue;
+            EXPECT_EQ(merged.nodes[n].leaf_row_hints[slot],
+                      leaf_row_hint(merged.nodes[child.node_id()]));
+            roots += !merged.is_object_node(std::uint32_t(n));
+            ++checked;
+        }
+    EXPECT_GT(roots, 0u);
+    EXPECT_GT(checked, roots);
 }
 
 /// Hits equal to the last bit, and the same occlusion answers.

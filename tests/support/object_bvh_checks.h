@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "embree_glue/reference/embree_reference.h"
+#include "rebraid/bvh/leaf_row_hints.h"
+#include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/object_subtree_counts.h"
 #include "rebraid/core/random.h"
@@ -136,6 +138,14 @@ inline void expect_valid(const Mesh& mesh, const ObjectBvh& bvh) {
     if (bvh.leaf_rows.empty()) return;  // BuildSettings::pre_arranged_leaves off
     EXPECT_TRUE(bvh.leaf_rows == make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, bvh.prim_ids))
         << "leaf rows out of step with the triangles or the leaves";
+    // So are the hints the traversal prefetches those rows by.
+    std::vector<WideNode> hinted = bvh.nodes;
+    write_leaf_row_hints(hinted);
+    std::size_t stale_hints = 0;
+    for (std::size_t n = 0; n < hinted.size(); ++n)
+        for (int slot = 0; slot < kBvhWidth; ++slot)
+            stale_hints += hinted[n].leaf_row_hints[slot] != bvh.nodes[n].leaf_row_hints[slot];
+    EXPECT_EQ(stale_hints, 0u) << "leaf-row hints out of step with the leaves";
 }
 
 /// The updated tree answers 10,000 varied rays (test_rays.h; closest hit and occlusion) as Embree
