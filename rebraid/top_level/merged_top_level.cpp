@@ -196,8 +196,9 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
                 fit_world_boxes(merged, first_node[i], bvh,
                                 object_to_world[slot.item->instance_id]);
             merged.nodes[slot.node].children[slot.slot] = NodeRef::inner(first_node[i]);
-            merged.nodes[slot.node].leaf_row_hints[slot.slot] =
-                leaf_row_hint(merged.nodes[first_node[i]]);
+            if (bvh.leaf_rows != nullptr)  // hints name rows
+                merged.nodes[slot.node].leaf_row_hints[slot.slot] =
+                    leaf_row_hint(merged.nodes[first_node[i]]);
         }
     });
     for (const MergedLeafSource& source : merged.sources)

@@ -450,7 +450,7 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
         };
         MergedLeafVisitor<decltype(object_leaves), decltype(items)> visitor{merged, object_leaves,
                                                                             items};
-        const MergedPrefetch prefetch_item{entries, merged};
+        const MergedPrefetch<decltype(entries)> prefetch_item{entries, merged};
         traverse_bvh<TraversalOrder::nearest_first, LeafVisits::by_node>(
             merged.nodes.data(), merged.root, world_ray, counters, visitor, prefetch_item);
         if (hit_prim_ids != nullptr) hit.prim_id = hit_prim_ids[hit.prim_id];
