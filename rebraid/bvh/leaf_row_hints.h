@@ -1,8 +1,10 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/wide_node.h"
 
 namespace rebraid {
@@ -26,5 +28,24 @@ std::uint32_t leaf_row_hint(const WideNode& node);
 /// children. The traversal asks for those rows as it enters C, so that their cache misses
 /// overlap the ones of C's own node instead of following its box test.
 void write_leaf_row_hints(std::vector<WideNode>& nodes);
+
+/// traverse_bvh's leaf prefetcher for object BVHs with leaf rows: as a closest-hit traversal
+/// descends into an inner child, it asks for the rows of that child's leaf children (WideNode::
+/// leaf_row_hints), whose misses then overlap the child's own instead of following its box
+/// test. Stacked children are not asked for (measured: less gain on the default scene).
+struct LeafRowsPrefetch {
+    const float* rows;
+    void operator()(NodeRef) const {}
+    void rows_of_child(NodeRef, std::uint32_t hint) const {
+        const std::uint32_t lines = hint >> kLeafRowHintLineShift;
+        // Computed as an integer, so that no pointer past the rows is ever formed; a prefetch
+        // never faults.
+        const std::uintptr_t first =
+            reinterpret_cast<std::uintptr_t>(rows) +
+            sizeof(float) * kRowFloatsPerTriangle * std::uintptr_t(hint & NodeRef::kMaxFirst);
+        for (std::uint32_t line = 0; line < lines; ++line)
+            __builtin_prefetch(reinterpret_cast<const void*>(first + 64 * line));
+    }
+};
 
 }  // namespace rebraid

@@ -2,7 +2,6 @@
 
 #include <tbb/parallel_for.h>
 
-#include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/bvh/object_subtree_counts.h"
 #include "rebraid/bvh/wide_bvh_builder.h"
 #include "rebraid/core/build_timer.h"
@@ -43,10 +42,9 @@ ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> le
         const auto corners = mesh.corners(bvh.prim_ids[i]);
         bvh.triangles[i] = {corners[0], corners[1], corners[2]};
     });
-    if (pre_arranged_leaves) {
+    if (pre_arranged_leaves)
         bvh.leaf_rows = make_leaf_rows(bvh.nodes, bvh.root, bvh.triangles, bvh.prim_ids);
-        write_leaf_row_hints(bvh.nodes);
-    }
+    bvh.refresh_leaf_row_hints();
     bvh.node_prim_counts = subtree_prim_counts(bvh);
     return bvh;
 }

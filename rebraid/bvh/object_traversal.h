@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "rebraid/bvh/hit_triangle.h"
+#include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/bvh/leaf_row_lanes.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/traversal.h"

@@ -5,8 +5,6 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "rebraid/bvh/leaf_row_hints.h"
-#include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/node_box_test.h"
 #include "rebraid/bvh/prepared_ray.h"
 #include "rebraid/bvh/wide_node.h"
@@ -59,25 +57,6 @@ inline void prefetch_node(const WideNode* nodes, NodeRef ref) {
 /// A leaf prefetcher that does nothing (traverse_bvh's default).
 struct NoLeafPrefetch {
     void operator()(NodeRef) const {}
-};
-
-/// A leaf prefetcher for object BVHs with leaf rows: as a closest-hit traversal descends into
-/// an inner child, it asks for the rows of that child's leaf children (WideNode::
-/// leaf_row_hints), whose misses then overlap the child's own instead of following its box
-/// test. Stacked children are not asked for (measured: less gain on the default scene).
-struct LeafRowsPrefetch {
-    const float* rows;
-    void operator()(NodeRef) const {}
-    void rows_of_child(NodeRef, std::uint32_t hint) const {
-        const std::uint32_t lines = hint >> kLeafRowHintLineShift;
-        // Computed as an integer, so that no pointer past the rows is ever formed; a prefetch
-        // never faults.
-        const std::uintptr_t first =
-            reinterpret_cast<std::uintptr_t>(rows) +
-            sizeof(float) * kRowFloatsPerTriangle * std::uintptr_t(hint & NodeRef::kMaxFirst);
-        for (std::uint32_t line = 0; line < lines; ++line)
-            __builtin_prefetch(reinterpret_cast<const void*>(first + 64 * line));
-    }
 };
 
 /// Depth-first traversal of the wide BVH `nodes` from `start` (any node, or a leaf
