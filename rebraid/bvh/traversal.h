@@ -41,7 +41,7 @@ enum class LeafVisits {
     with_siblings,
     /// Per node, as the visitor says: at an inner node `id` with leaf children the ray enters,
     /// visit_leaf.takes_siblings(id) chooses with_siblings for them (handed over as
-    /// visit_leaf(id, refs, slots)) or one_by_one (each stacked and visited as
+    /// visit_leaf(node, slots), node the WideNode) or one_by_one (each stacked and visited as
     /// visit_leaf(NodeRef leaf)). For a tree whose nodes hold both kinds of leaves (a top level
     /// with object nodes merged in: merged_top_level.h). The start must be an inner node.
     by_node,
@@ -121,7 +121,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                 if (leaf_mask != 0) {
                     bool stop;
                     if constexpr (kByNode)
-                        stop = visit_leaf(current.node_id(), node.children, leaf_mask);
+                        stop = visit_leaf(node, leaf_mask);
                     else
                         stop = visit_leaf(node.children, leaf_mask);
                     if (stop) return true;

@@ -60,7 +60,8 @@ struct alignas(64) WideNode {
     NodeRef children[kBvhWidth];
     /// Per inner child, where its leaf children's rows start (leaf_row_hints.h), else 0;
     /// written for object BVHs with leaf rows, zero elsewhere (zeroed so that equal nodes
-    /// compare equal bytewise).
+    /// compare equal bytewise). Object nodes copied into a merged top level keep their
+    /// source's index in their leaf slots' words (MergedTopLevel::source_of_leaves).
     std::uint32_t leaf_row_hints[kBvhWidth] = {};
 
     /// A node with every slot unused.

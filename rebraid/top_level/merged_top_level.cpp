@@ -59,7 +59,10 @@ void copy_subtree(MergedTopLevel& merged, const ObjectBvhView& bvh, std::uint32_
     while (!pending.empty()) {
         const std::uint32_t id = pending.back();
         pending.pop_back();
-        for (NodeRef& child : merged.nodes[id].children) {
+        WideNode& node = merged.nodes[id];
+        for (int slot = 0; slot < kBvhWidth; ++slot) {
+            NodeRef& child = node.children[slot];
+            if (child.is_leaf()) node.leaf_row_hints[slot] = source;  // MergedTopLevel::source_of_leaves
             if (!child.is_inner()) continue;
             const std::uint32_t copy = place(child);
             child = NodeRef::inner(copy);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -78,6 +79,14 @@ struct MergedTopLevel {
     bool is_object_node(std::uint32_t node_id) const { return node_id >= first_object_node; }
     const MergedLeafSource& source_of(std::uint32_t node_id) const {
         return sources[node_sources[node_id - first_object_node]];
+    }
+    /// The source of copied object node `node`'s leaf children, `leaf_slots` the mask of some
+    /// of them (not empty): read from the node itself, whose leaf slots keep their source's
+    /// index in the hint words leaf_row_hints leaves unused there, so that testing the leaves
+    /// waits on no load beyond the node's own (node_sources, one entry per copied node, misses
+    /// the cache on large scenes).
+    const MergedLeafSource& source_of_leaves(const WideNode& node, unsigned leaf_slots) const {
+        return sources[node.leaf_row_hints[std::countr_zero(leaf_slots)]];
     }
     std::uint64_t memory_bytes() const {
         return nodes.size() * sizeof(WideNode) + node_sources.size() * sizeof(std::uint32_t) +

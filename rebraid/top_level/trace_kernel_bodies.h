@@ -341,8 +341,8 @@ struct MergedLeafVisitor {
     Items items;
 
     bool takes_siblings(std::uint32_t node_id) const { return merged.is_object_node(node_id); }
-    bool operator()(std::uint32_t node_id, const NodeRef* refs, unsigned slots) {
-        return object_leaves(merged.source_of(node_id), refs, slots);
+    bool operator()(const WideNode& node, unsigned slots) {
+        return object_leaves(merged.source_of_leaves(node, slots), node.children, slots);
     }
     bool operator()(NodeRef leaf) { return items(leaf); }
 };

@@ -58,8 +58,9 @@ bool same_child_box(const WideNode& a, const WideNode& b, int slot) {
 }
 
 /// Checks that the copy below `copy` is the object subtree below `original` node for node
-/// (same boxes, same leaves, inner children copied), each copied node taking `source` and
-/// reached once (`reached`, indexed by merged node id).
+/// (same boxes, same leaves, inner children copied), each copied node taking `source` (in
+/// node_sources, and for its leaves in source_of_leaves) and reached once (`reached`,
+/// indexed by merged node id).
 void expect_same_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
                          std::uint32_t source, NodeRef original, NodeRef copy,
                          std::vector<int>& reached) {
@@ -76,6 +77,9 @@ void expect_same_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
             expect_same_subtree(merged, bvh, source, child, b.children[slot], reached);
         else
             EXPECT_EQ(child, b.children[slot]);
+        if (child.is_leaf()) {
+            EXPECT_EQ(&merged.source_of_leaves(b, 1u << slot), &merged.sources[source]);
+        }
     }
 }
 
