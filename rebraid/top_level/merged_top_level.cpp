@@ -62,7 +62,8 @@ void copy_subtree(MergedTopLevel& merged, const ObjectBvhView& bvh, std::uint32_
         WideNode& node = merged.nodes[id];
         for (int slot = 0; slot < kBvhWidth; ++slot) {
             NodeRef& child = node.children[slot];
-            if (child.is_leaf()) node.leaf_row_hints[slot] = source;  // MergedTopLevel::source_of_leaves
+            // Leaf slots carry no hint: their words name the source (source_of_leaves).
+            if (child.is_leaf()) node.leaf_row_hints[slot] = source;
             if (!child.is_inner()) continue;
             const std::uint32_t copy = place(child);
             child = NodeRef::inner(copy);
