@@ -43,6 +43,29 @@ void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
     }
 }
 
+void rewrite_leaf_row_ids(const std::vector<WideNode>& nodes, NodeRef root,
+                          const std::vector<std::uint32_t>& ids, std::vector<float>& rows) {
+    if (rows.size() != kRowFloatsPerTriangle * ids.size() + 2 * kLeafRowPadding)
+        throw Error("rewrite_leaf_row_ids: " + std::to_string(rows.size()) + " floats for " +
+                    std::to_string(ids.size()) + " ids (internal error)");
+    if (root.is_empty()) return;
+    std::vector<NodeRef> pending{root};
+    while (!pending.empty()) {
+        const NodeRef ref = pending.back();
+        pending.pop_back();
+        if (ref.is_leaf()) {
+            const std::uint32_t first = ref.first_prim(), count = ref.prim_count();
+            float* id_row = rows.data() + kLeafRowPadding +
+                            std::size_t(kRowFloatsPerTriangle) * first + kCornerRows * count;
+            for (std::uint32_t i = 0; i < count; ++i)
+                id_row[i] = std::bit_cast<float>(ids[first + i]);
+            continue;
+        }
+        for (const NodeRef child : nodes[ref.node_id()].children)
+            if (!child.is_empty()) pending.push_back(child);
+    }
+}
+
 std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
                                   const std::vector<TriangleVerts>& triangles,
                                   const std::vector<PrimId>& prim_ids) {

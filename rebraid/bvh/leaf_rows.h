@@ -44,6 +44,11 @@ void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
                        const std::vector<TriangleVerts>& triangles,
                        const std::vector<PrimId>& prim_ids, std::vector<float>& rows);
 
+/// Writes only the id row of every leaf below `root` again, from `ids` (leaf order): a
+/// structure that names its hits otherwise than by mesh primID (flat_hit_ids.h).
+void rewrite_leaf_row_ids(const std::vector<WideNode>& nodes, NodeRef root,
+                          const std::vector<std::uint32_t>& ids, std::vector<float>& rows);
+
 /// Writes the rows of one leaf again from `triangles` and `prim_ids` (leaf order) into `rows`
 /// (the whole buffer, padding included).
 void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, const PrimId* prim_ids,

@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 #include "rebraid/bvh/object_bvh_builder.h"
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/huge_pages.h"
@@ -76,10 +78,27 @@ FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings)
     const Mesh world = make_world_mesh(scene, triangle_instance_, triangle_prim_);
     bvh_ = build_object_bvh(world, settings);
     renumber_in_leaf_order(bvh_, triangle_instance_, triangle_prim_);
+    write_hit_ids(scene);
     build_info_.build_ms = timer.elapsed_ms();
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();
     build_info_.meshes = scene.meshes.size();
+}
+
+void FlatAccel::write_hit_ids(const Scene& scene) {
+    std::size_t max_triangles = 0;
+    for (const Mesh& mesh : scene.meshes)
+        max_triangles = std::max(max_triangles, mesh.triangles.size());
+    hit_ids_ = FlatHitIds::for_scene(scene.instances.size(), max_triangles);
+    if (bvh_.leaf_rows.empty()) return;
+    // The id row names the triangle by its leaf position (the tables' index) where the pair
+    // does not pack; the kernels read it only where it does.
+    std::vector<std::uint32_t> words(triangle_prim_.size());
+    tbb::parallel_for(std::size_t(0), words.size(), [&](std::size_t i) {
+        words[i] = hit_ids_.packs ? hit_ids_.pack(triangle_instance_[i], triangle_prim_[i])
+                                  : std::uint32_t(i);
+    });
+    rewrite_leaf_row_ids(bvh_.nodes, bvh_.root, words, bvh_.leaf_rows);
 }
 
 Hit FlatAccel::intersect_counted(const Ray& ray, TraversalCounters* counters) const {

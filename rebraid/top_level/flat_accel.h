@@ -8,6 +8,7 @@
 #include "rebraid/core/scene.h"
 #include "rebraid/core/simd_level.h"
 #include "rebraid/core/triangle_test.h"
+#include "rebraid/top_level/flat_hit_ids.h"
 
 namespace rebraid {
 
@@ -27,6 +28,8 @@ public:
     /// Instance and primID of each world triangle (index = the flat BVH's primID).
     const std::vector<InstanceId>& triangle_instances() const { return triangle_instance_; }
     const std::vector<PrimId>& triangle_prims() const { return triangle_prim_; }
+    /// How the leaf rows name a hit's instance and primID, where they can (flat_hit_ids.h).
+    const FlatHitIds& hit_ids() const { return hit_ids_; }
 
     /// The kernel level rays are traced with: default_simd_level() at construction.
     SimdLevel simd_level() const { return simd_level_; }
@@ -41,9 +44,13 @@ public:
     void set_triangle_test(TriangleTest test);
 
 private:
+    /// Chooses hit_ids_ and writes the leaf rows' id row to match.
+    void write_hit_ids(const Scene& scene);
+
     ObjectBvh bvh_;
     std::vector<InstanceId> triangle_instance_;
     std::vector<PrimId> triangle_prim_;
+    FlatHitIds hit_ids_;
     AccelStats build_info_;
     SimdLevel simd_level_;
     TriangleTest triangle_test_ = TriangleTest::moller;

@@ -25,21 +25,34 @@ template <TriangleTest kTest>
                                     TraversalCounters* counters) {
     Hit hit;
     PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
-    // World triangles are numbered in leaf order: the hit's leaf position is its world primID.
-    // The id lookup after traversal would miss the cache on large scenes: the ids of each
-    // hit are asked for as it is found.
+    // Where the leaf rows name instance and primID in one word (FlatHitIds), the closest hit's
+    // word comes from the leaf just tested. Otherwise world triangles are numbered in leaf
+    // order, the hit's leaf position indexes the tables, and since that lookup after the
+    // traversal would miss the cache on large scenes, each hit's ids are asked for as it is
+    // found.
+    const FlatHitIds ids = accel.hit_ids();
     const InstanceId* instances = accel.triangle_instances().data();
     const PrimId* prims = accel.triangle_prims().data();
-    const auto prefetch_ids = [instances, prims](std::uint32_t position, auto&&, auto&&) {
+    std::optional<std::uint32_t> hit_word;
+    const auto on_closer_hit = [&](std::uint32_t position, auto&&, std::optional<PrimId> row_word) {
+        if (ids.packs && row_word) {
+            hit_word = *row_word;
+            return;
+        }
         __builtin_prefetch(instances + position);
         __builtin_prefetch(prims + position);
     };
     const ObjectBvh& bvh = accel.bvh();
     if (intersect_object_bvh_leaf_order<kTest>(bvh, bvh.root, traversal_ray, hit, counters,
-                                               prefetch_ids)) {
-        const PrimId world_prim = hit.prim_id;
-        hit.instance_id = instances[world_prim];
-        hit.prim_id = prims[world_prim];
+                                               on_closer_hit)) {
+        if (hit_word) {
+            hit.instance_id = ids.instance_of(*hit_word);
+            hit.prim_id = ids.prim_of(*hit_word);
+        } else {
+            const PrimId world_prim = hit.prim_id;
+            hit.instance_id = instances[world_prim];
+            hit.prim_id = prims[world_prim];
+        }
     }
     return hit;
 }
