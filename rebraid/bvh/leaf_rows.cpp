@@ -7,6 +7,26 @@
 #include "rebraid/core/huge_pages.h"
 
 namespace rebraid {
+namespace {
+
+/// Calls `visit(leaf)` for every leaf below `root`.
+template <class Visit>
+void for_each_leaf(const std::vector<WideNode>& nodes, NodeRef root, Visit&& visit) {
+    if (root.is_empty()) return;
+    std::vector<NodeRef> pending{root};
+    while (!pending.empty()) {
+        const NodeRef ref = pending.back();
+        pending.pop_back();
+        if (ref.is_leaf()) {
+            visit(ref);
+            continue;
+        }
+        for (const NodeRef child : nodes[ref.node_id()].children)
+            if (!child.is_empty()) pending.push_back(child);
+    }
+}
+
+}  // namespace
 
 void write_leaf_rows(NodeRef leaf, const TriangleVerts* triangles, const PrimId* prim_ids,
                      float* rows) {
@@ -29,18 +49,9 @@ void rewrite_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
         throw Error("rewrite_leaf_rows: " + std::to_string(rows.size()) + " floats and " +
                     std::to_string(prim_ids.size()) + " ids for " +
                     std::to_string(triangles.size()) + " triangles (internal error)");
-    if (root.is_empty()) return;
-    std::vector<NodeRef> pending{root};
-    while (!pending.empty()) {
-        const NodeRef ref = pending.back();
-        pending.pop_back();
-        if (ref.is_leaf()) {
-            write_leaf_rows(ref, triangles.data(), prim_ids.data(), rows.data());
-            continue;
-        }
-        for (const NodeRef child : nodes[ref.node_id()].children)
-            if (!child.is_empty()) pending.push_back(child);
-    }
+    for_each_leaf(nodes, root, [&](NodeRef leaf) {
+        write_leaf_rows(leaf, triangles.data(), prim_ids.data(), rows.data());
+    });
 }
 
 void rewrite_leaf_row_ids(const std::vector<WideNode>& nodes, NodeRef root,
@@ -48,22 +59,12 @@ void rewrite_leaf_row_ids(const std::vector<WideNode>& nodes, NodeRef root,
     if (rows.size() != kRowFloatsPerTriangle * ids.size() + 2 * kLeafRowPadding)
         throw Error("rewrite_leaf_row_ids: " + std::to_string(rows.size()) + " floats for " +
                     std::to_string(ids.size()) + " ids (internal error)");
-    if (root.is_empty()) return;
-    std::vector<NodeRef> pending{root};
-    while (!pending.empty()) {
-        const NodeRef ref = pending.back();
-        pending.pop_back();
-        if (ref.is_leaf()) {
-            const std::uint32_t first = ref.first_prim(), count = ref.prim_count();
-            float* id_row = rows.data() + kLeafRowPadding +
-                            std::size_t(kRowFloatsPerTriangle) * first + kCornerRows * count;
-            for (std::uint32_t i = 0; i < count; ++i)
-                id_row[i] = std::bit_cast<float>(ids[first + i]);
-            continue;
-        }
-        for (const NodeRef child : nodes[ref.node_id()].children)
-            if (!child.is_empty()) pending.push_back(child);
-    }
+    for_each_leaf(nodes, root, [&](NodeRef leaf) {
+        const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
+        float* id_row = rows.data() + kLeafRowPadding + std::size_t(kRowFloatsPerTriangle) * first +
+                        kCornerRows * count;
+        for (std::uint32_t i = 0; i < count; ++i) id_row[i] = std::bit_cast<float>(ids[first + i]);
+    });
 }
 
 std::vector<float> make_leaf_rows(const std::vector<WideNode>& nodes, NodeRef root,
