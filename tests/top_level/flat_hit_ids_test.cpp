@@ -3,12 +3,12 @@
 
 #include <bit>
 #include <cstdint>
-#include <vector>
 
 #include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/flat_hit_ids.h"
+#include "support/reachability.h"
 #include "support/test_scenes.h"
 
 namespace rebraid {
@@ -47,16 +47,8 @@ void expect_rows_name_the_tables_ids(const FlatAccel& accel) {
     ASSERT_TRUE(ids.packs);
     const float* rows = bvh.leaf_rows.data() + kLeafRowPadding;
     std::size_t checked = 0;
-    std::vector<NodeRef> pending{bvh.root};
-    while (!pending.empty()) {
-        const NodeRef ref = pending.back();
-        pending.pop_back();
-        if (ref.is_inner()) {
-            for (const NodeRef child : bvh.nodes[ref.node_id()].children)
-                if (!child.is_empty()) pending.push_back(child);
-            continue;
-        }
-        const std::uint32_t first = ref.first_prim(), count = ref.prim_count();
+    test::for_each_leaf(bvh.nodes, bvh.root, [&](NodeRef leaf) {
+        const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
         const float* id_row = leaf_rows_at(rows, first) + kCornerRows * count;
         for (std::uint32_t i = 0; i < count; ++i) {
             const auto word = std::bit_cast<std::uint32_t>(id_row[i]);
@@ -64,7 +56,7 @@ void expect_rows_name_the_tables_ids(const FlatAccel& accel) {
             EXPECT_EQ(ids.prim_of(word), accel.triangle_prims()[first + i]);
             ++checked;
         }
-    }
+    });
     EXPECT_EQ(checked, accel.triangle_prims().size());
 }
 
