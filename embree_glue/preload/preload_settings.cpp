@@ -66,7 +66,9 @@ PreloadSettings read_preload_settings(const EnvironmentReader& environment) {
 
 std::optional<std::string> process_environment(const std::string& name) {
     const char* value = std::getenv(name.c_str());
-    if (value == nullptr) return std::nullopt;
+    // Set but empty counts as unset: shells and launchers pass `NAME=` for a setting they
+    // leave at its default.
+    if (value == nullptr || *value == '\0') return std::nullopt;
     return std::string(value);
 }
 

@@ -26,7 +26,7 @@ using EnvironmentReader = std::function<std::optional<std::string>(const std::st
 /// value for a value it does not accept.
 PreloadSettings read_preload_settings(const EnvironmentReader& environment);
 
-/// The process environment (getenv).
+/// The process environment (getenv); a variable set to the empty string reads as unset.
 std::optional<std::string> process_environment(const std::string& name);
 
 }  // namespace rebraid::glue

@@ -98,6 +98,18 @@ TEST(EmbreePreload, AccelSettingsFromTheEnvironmentGiveTheSameAnswers) {
     }
 }
 
+TEST(EmbreePreload, EmptySettingsReadAsUnset) {
+    const fs::path dir = test_scratch_dir("embree_preload", true);
+    const CommandResult embree = run_program(dir, "embree", "", client_command("trace"));
+    const CommandResult preload =
+        run_program(dir, "empty", preload_environment("REBRAID_PRELOAD= REBRAID_ACCEL="),
+                    client_command("trace"));
+    ASSERT_EQ(preload.exit_code, 0) << preload.err;
+    EXPECT_TRUE(embree.out == preload.out);
+    EXPECT_EQ(count_lines_with(preload.err, "rebraid serves it"), 2u) << preload.err;
+    EXPECT_EQ(preload.err.find("REBRAID_"), std::string::npos) << preload.err;
+}
+
 TEST(EmbreePreload, BadAccelSettingSaysWhyAndLeavesEverySceneToEmbree) {
     const fs::path dir = test_scratch_dir("embree_preload", true);
     const CommandResult embree = run_program(dir, "embree", "", client_command("trace"));
