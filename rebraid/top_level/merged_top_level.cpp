@@ -7,7 +7,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/bvh/vertex_world_bounds.h"
 #include "rebraid/core/huge_pages.h"
 
@@ -51,7 +50,6 @@ void copy_subtree(MergedTopLevel& merged, const ObjectBvhView& bvh, std::uint32_
     const auto place = [&](NodeRef object_ref) {
         const std::uint32_t id = next++;
         merged.nodes[id] = bvh.nodes[object_ref.node_id()];
-        merged.node_sources[id - merged.first_object_node] = source;
         return id;
     };
     // Copied nodes whose inner children still name object nodes.
@@ -185,8 +183,6 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     reserve_on_huge_pages(merged.nodes, first_node.back());
     merged.nodes.assign(top.nodes.begin(), top.nodes.end());
     merged.nodes.resize(first_node.back());
-    reserve_on_huge_pages(merged.node_sources, first_node.back() - merged.first_object_node);
-    merged.node_sources.resize(first_node.back() - merged.first_object_node);
     merged.sources.resize(slots.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -200,9 +196,6 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
                 fit_world_boxes(merged, first_node[i], bvh,
                                 object_to_world[slot.item->instance_id]);
             merged.nodes[slot.node].children[slot.slot] = NodeRef::inner(first_node[i]);
-            if (bvh.leaf_rows != nullptr)  // hints name rows
-                merged.nodes[slot.node].leaf_row_hints[slot.slot] =
-                    leaf_row_hint(merged.nodes[first_node[i]]);
         }
     });
     for (const MergedLeafSource& source : merged.sources)

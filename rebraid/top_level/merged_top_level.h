@@ -67,8 +67,8 @@ struct MergedTopLevel {
     /// Nodes from this id on are copied object nodes; below it, the top level's own, whose
     /// leaves are top-level items.
     std::uint32_t first_object_node = 0;
-    /// Per copied object node (index = id - first_object_node): its subtree's source.
-    std::vector<std::uint32_t> node_sources;
+    /// Per merged subtree, in the order the copy holds them (the top level's node and slot
+    /// order): where its leaves' triangles are and in which space.
     std::vector<MergedLeafSource> sources;
     /// Every source has pre-arranged rows: the SIMD kernels read rows only (one loop).
     bool every_source_has_rows = true;
@@ -77,20 +77,16 @@ struct MergedTopLevel {
 
     bool empty() const { return root.is_empty(); }
     bool is_object_node(std::uint32_t node_id) const { return node_id >= first_object_node; }
-    const MergedLeafSource& source_of(std::uint32_t node_id) const {
-        return sources[node_sources[node_id - first_object_node]];
-    }
     /// The source of copied object node `node`'s leaf children, `leaf_slots` the mask of some
     /// of them (not empty): read from the node itself, whose leaf slots keep their source's
     /// index in the hint words leaf_row_hints leaves unused there, so that testing the leaves
-    /// waits on no load beyond the node's own (node_sources, one entry per copied node, misses
-    /// the cache on large scenes).
+    /// waits on no load beyond the node's own (a table per copied node missed the cache on
+    /// large scenes).
     const MergedLeafSource& source_of_leaves(const WideNode& node, unsigned leaf_slots) const {
         return sources[node.leaf_row_hints[std::countr_zero(leaf_slots)]];
     }
     std::uint64_t memory_bytes() const {
-        return nodes.size() * sizeof(WideNode) + node_sources.size() * sizeof(std::uint32_t) +
-               sources.size() * sizeof(MergedLeafSource);
+        return nodes.size() * sizeof(WideNode) + sources.size() * sizeof(MergedLeafSource);
     }
 };
 

@@ -19,7 +19,6 @@
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instanced_accel.h"
-#include "rebraid/top_level/merged_top_level.h"
 #include "support/hit_comparison.h"
 
 namespace rebraid {
@@ -128,32 +127,6 @@ TEST(LeafRows, HintsNameTheRowsOfEachInnerChildsLeafChildren) {
         }
     EXPECT_GT(hinted, bvh.nodes.size() / 2);
     EXPECT_LT(capped, hinted);
-}
-
-// A merged top level hints the rows of the object subtrees it hangs in: the slot holding a
-// copied subtree's root carries that root's hint, and copied nodes keep theirs.
-TEST(LeafRows, MergedTopLevelsHintTheRowsOfTheSubtreesTheyHangIn) {
-    RebraidSettings settings;
-    settings.world_space_single_instances = false;
-    settings.world_space_copy_budget = 0.0f;
-    settings.merge_placed_instances = true;
-    settings.merge_placed_node_budget = 1000.0f;
-    const Scene scene = make_default_scene();
-    const InstancedAccel accel = build_rebraid_accel(scene, own_object_bvh_builder(), settings);
-    const MergedTopLevel& merged = accel.merged_top_level();
-    ASSERT_LT(merged.first_object_node, merged.nodes.size());
-    std::size_t roots = 0, checked = 0;
-    for (std::size_t n = 0; n < merged.nodes.size(); ++n)
-        for (int slot = 0; slot < kBvhWidth; ++slot) {
-            const NodeRef child = merged.nodes[n].children[slot];
-            if (!child.is_inner() || !merged.is_object_node(child.node_id())) continue;
-            EXPECT_EQ(merged.nodes[n].leaf_row_hints[slot],
-                      leaf_row_hint(merged.nodes[child.node_id()]));
-            roots += !merged.is_object_node(std::uint32_t(n));
-            ++checked;
-        }
-    EXPECT_GT(roots, 0u);
-    EXPECT_GT(checked, roots);
 }
 
 /// Hits equal to the last bit, and the same occlusion answers.

@@ -58,16 +58,14 @@ bool same_child_box(const WideNode& a, const WideNode& b, int slot) {
 }
 
 /// Checks that the copy below `copy` is the object subtree below `original` node for node
-/// (same boxes, same leaves, inner children copied), each copied node taking `source` (in
-/// node_sources, and for its leaves in source_of_leaves) and reached once (`reached`,
-/// indexed by merged node id).
+/// (same boxes, same leaves, inner children copied), its leaves taking `source`
+/// (source_of_leaves), each copied node reached once (`reached`, indexed by merged node id).
 void expect_same_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
                          std::uint32_t source, NodeRef original, NodeRef copy,
                          std::vector<int>& reached) {
     ASSERT_TRUE(copy.is_inner());
     ASSERT_TRUE(merged.is_object_node(copy.node_id()));
     ++reached[copy.node_id()];
-    EXPECT_EQ(merged.node_sources[copy.node_id() - merged.first_object_node], source);
     const WideNode& a = bvh.nodes[original.node_id()];
     const WideNode& b = merged.nodes[copy.node_id()];
     for (int slot = 0; slot < kBvhWidth; ++slot) {
@@ -91,7 +89,6 @@ TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeWhereTheItemWas) {
     ASSERT_FALSE(merged.empty());
     EXPECT_EQ(merged.root, top.root);
     ASSERT_EQ(merged.first_object_node, top.nodes.size());
-    ASSERT_EQ(merged.node_sources.size(), merged.nodes.size() - top.nodes.size());
     std::vector<int> reached(merged.nodes.size(), 0);
     std::size_t merged_items = 0, kept_items = 0;
     for (std::uint32_t n = 0; n < top.nodes.size(); ++n) {
@@ -110,8 +107,8 @@ TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeWhereTheItemWas) {
             const InstanceTarget& target = accel.instance_targets()[item.instance_id];
             EXPECT_EQ(target.space, InstanceTarget::kWorldSpace);
             ASSERT_TRUE(item.object_node.is_inner());
-            const std::uint32_t source =
-                merged.node_sources[copy.node_id() - merged.first_object_node];
+            // Sources follow the merged slots in the top level's node and slot order.
+            const std::uint32_t source = std::uint32_t(merged_items);
             ASSERT_LT(source, merged.sources.size());
             const ObjectBvhView& bvh = accel.object_views()[target.mesh];
             EXPECT_EQ(merged.sources[source].instance, item.instance_id);
@@ -143,8 +140,8 @@ TEST(MergedTopLevel, MergesOnlyWhereMostItemsAreInWorldSpace) {
 /// `bvh`: the same leaves and shape, and each child's box in world space, holding the
 /// corners of the child's triangles mapped by `to_world`.
 void expect_world_boxed_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
-                                const AffineTransform& to_world, NodeRef original, NodeRef copy,
-                                std::vector<int>& reached) {
+                                const AffineTransform& to_world, std::uint32_t source,
+                                NodeRef original, NodeRef copy, std::vector<int>& reached) {
     ASSERT_TRUE(copy.is_inner());
     ASSERT_TRUE(merged.is_object_node(copy.node_id()));
     ++reached[copy.node_id()];
@@ -176,10 +173,13 @@ void expect_world_boxed_subtree(const MergedTopLevel& merged, const ObjectBvhVie
                     }
                 }
         }
-        if (child.is_inner())
-            expect_world_boxed_subtree(merged, bvh, to_world, child, b.children[slot], reached);
-        else
+        if (child.is_inner()) {
+            expect_world_boxed_subtree(merged, bvh, to_world, source, child, b.children[slot],
+                                       reached);
+        } else {
             EXPECT_EQ(child, b.children[slot]);
+            EXPECT_EQ(&merged.source_of_leaves(b, 1u << slot), &merged.sources[source]);
+        }
     }
 }
 
@@ -201,13 +201,15 @@ TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
             const TopLevelItem& item = top.items[child.first_prim()];
             const InstanceTarget& target = accel.instance_targets()[item.instance_id];
             EXPECT_NE(target.space, InstanceTarget::kWorldSpace);
-            const MergedLeafSource& source = merged.source_of(copy.node_id());
+            ASSERT_LT(merged_items, merged.sources.size());
+            const MergedLeafSource& source = merged.sources[merged_items];
             EXPECT_EQ(source.instance, item.instance_id);
             EXPECT_EQ(source.target, &target);
             EXPECT_EQ(source.space, target.space);
             expect_world_boxed_subtree(merged, accel.object_views()[target.mesh],
                                        scene.instances[item.instance_id].object_to_world,
-                                       item.object_node, copy, reached);
+                                       std::uint32_t(merged_items), item.object_node, copy,
+                                       reached);
             ++merged_items;
         }
     EXPECT_EQ(merged_items, merged.sources.size());
@@ -274,7 +276,6 @@ TEST_P(MergedRays, SameCopyOnAnyThreadCount) {
         const MergedTopLevel& merged = accel.merged_top_level();
         StructureHash hash;
         hash.add<WideNode>(merged.nodes);
-        hash.add<std::uint32_t>(merged.node_sources);
         for (const MergedLeafSource& source : merged.sources) hash.add_value(source.instance);
         return hash.value();
     });
