@@ -87,9 +87,12 @@ def _git(*args):
 
 
 def commit_info():
-    """The commit of the working tree and whether tracked files differ from it."""
+    """The commit of the working tree and whether tracked files differ from it, leaving out
+    the collection's own outputs (bench/results/, bench/RESULTS*): results written by a
+    collection that has not been committed yet do not change what is measured."""
     head = _git("rev-parse", "HEAD")
-    status = _git("status", "--porcelain", "--untracked-files=no")
+    status = _git("status", "--porcelain", "--untracked-files=no", "--", ".",
+                  ":(exclude)bench/results", ":(exclude)bench/RESULTS*")
     return {"commit": head, "dirty": bool(status)} if head else {"commit": None, "dirty": None}
 
 
