@@ -137,8 +137,8 @@ TEST(MergedTopLevel, MergesOnlyWhereMostItemsAreInWorldSpace) {
 }
 
 /// Checks the copy below `copy` of the object subtree below `original` of a placed instance's
-/// `bvh`: the same leaves and shape, and each child's box in world space, holding the
-/// corners of the child's triangles mapped by `to_world`.
+/// `bvh`: the same leaves and shape, each child's box in world space, holding the corners
+/// of the child's triangles mapped by `to_world`, and its leaves taking `source`.
 void expect_world_boxed_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
                                 const AffineTransform& to_world, std::uint32_t source,
                                 NodeRef original, NodeRef copy, std::vector<int>& reached) {
