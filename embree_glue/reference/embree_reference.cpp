@@ -152,6 +152,10 @@ double milliseconds_since(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
+bool is_traced_by_embree(const Ray& ray, const EmbreeRayLimits& limits, const char* accel_name) {
+    return check_ray(ray, limits, accel_name) == RayCheck::trace;
+}
+
 // ---- EmbreeFlatAccel ---------------------------------------------------------------------
 
 EmbreeFlatAccel::EmbreeFlatAccel(const Scene& scene, const EmbreeReferenceSettings& settings)

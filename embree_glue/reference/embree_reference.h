@@ -48,6 +48,12 @@ struct EmbreeRayLimits {
     float max_direction_coordinate = kEmbreeLargestRayCoordinate;  ///< |dir.x|, |dir.y|, |dir.z|
 };
 
+/// Whether `ray` is handed to Embree at all, as both structures below decide: false for an empty
+/// or NaN segment (no t satisfies tnear <= t <= tfar: a miss by contract, Embree is not
+/// called); throws rebraid::Error, naming `accel_name`, for a ray Embree cannot trace under
+/// `limits` (negative tnear, a coordinate not finite or beyond them).
+bool is_traced_by_embree(const Ray& ray, const EmbreeRayLimits& limits, const char* accel_name);
+
 /// `embree-flat`: one Embree scene holding every instance's triangles transformed to world
 /// space. Each instance becomes its own triangle geometry whose geomID is the instance id, so
 /// hits name their instance without a lookup table; at medium/high quality Embree still builds

@@ -1,0 +1,73 @@
+#include "embree_glue/reference/embree_ray_batch.h"
+
+#include <limits>
+
+#include "embree_glue/reference/embree_geometry.h"
+#include "embree_glue/reference/embree_reference.h"
+#include "rebraid/core/error.h"
+
+namespace rebraid::glue {
+
+bool EmbreeRayBatch::serves(const Accel& accel) {
+    return dynamic_cast<const EmbreeFlatAccel*>(&accel) != nullptr ||
+           dynamic_cast<const EmbreeInstancedAccel*>(&accel) != nullptr;
+}
+
+EmbreeRayBatch::EmbreeRayBatch(const Accel& accel, std::span<const Ray> rays) {
+    EmbreeRayLimits limits;
+    const char* accel_name = nullptr;
+    if (const auto* flat = dynamic_cast<const EmbreeFlatAccel*>(&accel)) {
+        scene_ = flat->rtc_scene();
+        limits = flat->ray_limits();
+        accel_name = "EmbreeFlatAccel";
+    } else if (const auto* instanced = dynamic_cast<const EmbreeInstancedAccel*>(&accel)) {
+        scene_ = instanced->rtc_scene();
+        limits = instanced->ray_limits();
+        accel_name = "EmbreeInstancedAccel";
+        instance_id_is_inst_id_ = true;
+    } else {
+        throw Error("EmbreeRayBatch: the structure is not one of Embree's reference structures");
+    }
+    rays_.resize(rays.size());
+    input_tfar_.resize(rays.size());
+    is_traced_.resize(rays.size());
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        is_traced_[i] = is_traced_by_embree(rays[i], limits, accel_name) ? 1 : 0;
+        rays_[i].ray = to_embree_ray(rays[i]);
+        input_tfar_[i] = rays[i].tfar;
+        rays_[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rays_[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    }
+}
+
+void EmbreeRayBatch::intersect(std::size_t begin, std::size_t end) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (std::size_t i = begin; i < end; ++i) {
+        RTCRayHit& rayhit = rays_[i];
+        rayhit.ray.tfar = input_tfar_[i];
+        rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        if (is_traced_[i]) rtcIntersect1(scene_, &context, &rayhit);
+    }
+}
+
+void EmbreeRayBatch::occlude(std::size_t begin, std::size_t end) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (std::size_t i = begin; i < end; ++i) {
+        RTCRay& ray = rays_[i].ray;
+        ray.tfar = input_tfar_[i];
+        if (is_traced_[i]) rtcOccluded1(scene_, &context, &ray);
+    }
+}
+
+bool EmbreeRayBatch::is_occluded(std::size_t i) const {
+    return rays_[i].ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+Hit EmbreeRayBatch::hit(std::size_t i) const {
+    return hit_from_embree(rays_[i], instance_id_is_inst_id_);
+}
+
+}  // namespace rebraid::glue

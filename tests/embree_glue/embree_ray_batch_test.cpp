@@ -1,0 +1,97 @@
+#include "embree_glue/reference/embree_ray_batch.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <vector>
+
+#include "embree_glue/reference/embree_reference.h"
+#include "rebraid/core/error.h"
+#include "rebraid/generators/default_scene.h"
+#include "rebraid/generators/random_rays.h"
+#include "rebraid/top_level/flat_accel.h"
+
+namespace rebraid::glue {
+namespace {
+
+/// Random rays through `scene`, with an empty segment, a NaN one and a short one among them.
+std::vector<Ray> rays_with_edge_cases(const Scene& scene) {
+    std::vector<Ray> rays = generate_random_rays(scene.bounds(), 3000, 21);
+    rays[5].tnear = 2.0f;
+    rays[5].tfar = 1.0f;
+    rays[9].tfar = std::numeric_limits<float>::quiet_NaN();
+    rays[13].tfar = 1e-3f;
+    return rays;
+}
+
+/// The batch answers as the structure's own queries do, ray for ray, whatever the ranges it
+/// is traced in and the queries traced before.
+template <class EmbreeAccel>
+void expect_batch_matches_accel() {
+    const Scene scene = make_default_scene();
+    const EmbreeAccel accel(scene);
+    const std::vector<Ray> rays = rays_with_edge_cases(scene);
+    ASSERT_TRUE(EmbreeRayBatch::serves(accel));
+    EmbreeRayBatch batch(accel, rays);
+    ASSERT_EQ(batch.size(), rays.size());
+    for (int round = 0; round < 2; ++round) {  // the second reads rays the first traced
+        std::size_t hits = 0, occluded = 0;
+        for (std::size_t begin = 0; begin < rays.size(); begin += 64) {
+            const std::size_t end = std::min(begin + 64, rays.size());
+            batch.intersect(begin, end);
+            for (std::size_t i = begin; i < end; ++i) {
+                const Hit expected = accel.intersect(rays[i]), got = batch.hit(i);
+                ASSERT_EQ(got.is_hit(), expected.is_hit()) << "ray " << i;
+                hits += got.is_hit();
+                if (!expected.is_hit()) continue;
+                EXPECT_EQ(got.t, expected.t) << "ray " << i;
+                EXPECT_EQ(got.instance_id, expected.instance_id) << "ray " << i;
+                EXPECT_EQ(got.prim_id, expected.prim_id) << "ray " << i;
+                EXPECT_EQ(got.u, expected.u) << "ray " << i;
+                EXPECT_EQ(got.v, expected.v) << "ray " << i;
+            }
+            batch.occlude(begin, end);
+            for (std::size_t i = begin; i < end; ++i) {
+                EXPECT_EQ(batch.is_occluded(i), accel.occluded(rays[i])) << "ray " << i;
+                occluded += batch.is_occluded(i);
+            }
+        }
+        // Both kinds of answer occur, so the comparison above could fail either way.
+        EXPECT_GT(hits, rays.size() / 10);
+        EXPECT_LT(hits, rays.size());
+        EXPECT_EQ(occluded, hits);
+    }
+    EXPECT_FALSE(batch.hit(5).is_hit());  // empty segment: never handed to Embree
+    EXPECT_FALSE(batch.hit(9).is_hit());  // NaN segment
+}
+
+TEST(EmbreeRayBatch, AnswersAsTheFlatReferenceDoes) {
+    expect_batch_matches_accel<EmbreeFlatAccel>();
+}
+
+TEST(EmbreeRayBatch, AnswersAsTheInstancedReferenceDoes) {
+    expect_batch_matches_accel<EmbreeInstancedAccel>();
+}
+
+TEST(EmbreeRayBatch, RejectsRaysTheReferenceRejects) {
+    const Scene scene = make_default_scene();
+    const EmbreeFlatAccel accel(scene);
+    std::vector<Ray> rays = generate_random_rays(scene.bounds(), 10, 3);
+    rays[4].tnear = -1.0f;
+    EXPECT_THROW(accel.intersect(rays[4]), Error);
+    EXPECT_THROW(EmbreeRayBatch(accel, rays), Error);
+    rays[4].tnear = 0.0f;
+    rays[7].org.y = std::numeric_limits<float>::infinity();
+    EXPECT_THROW(EmbreeRayBatch(accel, rays), Error);
+}
+
+TEST(EmbreeRayBatch, ServesOnlyEmbreeStructures) {
+    const Scene scene = make_default_scene();
+    const FlatAccel flat(scene);
+    EXPECT_FALSE(EmbreeRayBatch::serves(flat));
+    EXPECT_THROW(EmbreeRayBatch(flat, std::vector<Ray>(1)), Error);
+}
+
+}  // namespace
+}  // namespace rebraid::glue
