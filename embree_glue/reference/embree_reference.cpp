@@ -73,10 +73,11 @@ RayCheck check_ray(const Ray& ray, const EmbreeRayLimits& limits, const char* ac
     // Embree itself treats tnear > tfar as an inactive ray, but not NaN.
     if (!(ray.tnear <= ray.tfar)) return RayCheck::empty_segment;
     const float org = limits.max_origin_coordinate, dir = limits.max_direction_coordinate;
-    const bool is_valid = (ray.tnear >= 0.0f) & (std::fabs(ray.org.x) <= org) &
-                          (std::fabs(ray.org.y) <= org) & (std::fabs(ray.org.z) <= org) &
-                          (std::fabs(ray.dir.x) <= dir) & (std::fabs(ray.dir.y) <= dir) &
-                          (std::fabs(ray.dir.z) <= dir);
+    // Every comparison made, then one branch: `&` on their 0/1 values, not `&&`.
+    const int is_valid = int(ray.tnear >= 0.0f) & int(std::fabs(ray.org.x) <= org) &
+                         int(std::fabs(ray.org.y) <= org) & int(std::fabs(ray.org.z) <= org) &
+                         int(std::fabs(ray.dir.x) <= dir) & int(std::fabs(ray.dir.y) <= dir) &
+                         int(std::fabs(ray.dir.z) <= dir);
     if (!is_valid) throw_invalid_ray(ray, limits, accel_name);
     return RayCheck::trace;
 }
