@@ -218,6 +218,10 @@ def section_method(runs):
   boxes from transformed vertices); `paper`
   is the variant `{PAPER}`: the paper's rules (extent opening,
   transformed node boxes).
+- Each structure is queried as its users query it: the project's through `Accel::intersect`,
+  Embree's by `rtcIntersect1` on rays already in Embree's layout (converted and checked before
+  the timing, `embree_glue/reference/embree_ray_batch.h`), so that no conversion counts
+  against Embree. The instruction counts below query both the same way.
 - A "{DASH}" marks a figure the structure or the command does not report.
 """
 
