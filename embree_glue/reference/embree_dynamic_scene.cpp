@@ -30,17 +30,6 @@ void commit_scene(EmbreeDevice& device, RTCScene scene, const char* what) {
     device.throw_if_error(what);
 }
 
-/// False for a ray Embree must not see: an empty segment is a miss; what Debian's Embree
-/// would assert on (negative tnear, non-finite origin or direction) throws.
-bool is_traceable(const Ray& ray) {
-    if (!(ray.tnear <= ray.tfar)) return false;
-    if (ray.tnear < 0.0f || !is_finite(ray.org) || !is_finite(ray.dir))
-        throw Error(
-            "EmbreeDynamicAccel: ray with negative tnear or non-finite origin or "
-            "direction");
-    return true;
-}
-
 }  // namespace
 
 std::string_view embree_dynamic_mode_name(EmbreeDynamicMode mode) {
@@ -185,13 +174,22 @@ EmbreeFrameTimes EmbreeDynamicAccel::update() {
     return times;
 }
 
+bool EmbreeDynamicAccel::is_traced_by_embree(const Ray& ray) {
+    if (!(ray.tnear <= ray.tfar)) return false;
+    if (ray.tnear < 0.0f || !is_finite(ray.org) || !is_finite(ray.dir))
+        throw Error(
+            "EmbreeDynamicAccel: ray with negative tnear or non-finite origin or "
+            "direction");
+    return true;
+}
+
 Hit EmbreeDynamicAccel::intersect_counted(const Ray& ray, TraversalCounters* /*counters*/) const {
-    if (!is_traceable(ray)) return Hit{};
+    if (!is_traced_by_embree(ray)) return Hit{};
     return embree_closest_hit(top_scene_.get(), ray, mode_ == EmbreeDynamicMode::instanced);
 }
 
 bool EmbreeDynamicAccel::occluded(const Ray& ray) const {
-    if (!is_traceable(ray)) return false;
+    if (!is_traced_by_embree(ray)) return false;
     return embree_is_occluded(top_scene_.get(), ray);
 }
 

@@ -56,6 +56,16 @@ public:
     /// Input counts, first build time and Embree's allocated bytes; Embree's BVHs have no SAH.
     AccelStats stats() const override;
 
+    /// The committed scene rays are traced in (flat: the scene; instanced: the top), for
+    /// callers that query Embree directly (EmbreeRayBatch).
+    RTCScene rtc_scene() const { return top_scene_.get(); }
+    /// True when hits name their instance by instID[0] (instanced), false by geomID (flat).
+    bool names_instances_by_inst_id() const { return mode_ == EmbreeDynamicMode::instanced; }
+    /// Whether `ray` is handed to Embree: false for an empty segment (a miss); throws
+    /// rebraid::Error for a ray Debian's Embree would assert on (negative tnear, non-finite
+    /// origin or direction).
+    static bool is_traced_by_embree(const Ray& ray);
+
 private:
     void build_flat();
     void build_instanced();

@@ -21,7 +21,7 @@ namespace rebraid::glue {
 class EmbreeRayBatch {
 public:
     /// True when `accel` is one of Embree's reference structures (EmbreeFlatAccel,
-    /// EmbreeInstancedAccel), whose scene a batch can trace.
+    /// EmbreeInstancedAccel, EmbreeDynamicAccel), whose scene a batch can trace.
     static bool serves(const Accel& accel);
 
     /// `rays` converted for `accel`'s scene, each checked as `accel.intersect` checks it

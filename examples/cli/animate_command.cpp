@@ -20,6 +20,7 @@
 #include "bench_rays.h"
 #include "commands.h"
 #include "embree_glue/reference/embree_dynamic_scene.h"
+#include "embree_glue/reference/embree_ray_batch.h"
 #include "option_checks.h"
 #include "output_file.h"
 #include "rebraid/core/error.h"
@@ -115,15 +116,27 @@ double milliseconds_since(std::chrono::steady_clock::time_point start) {
         .count();
 }
 
-/// Closest hits of both ray sets, in parallel, timed.
+/// Closest hits of both ray sets, in parallel, timed. Embree's structures trace rays already
+/// in Embree's layout (glue::EmbreeRayBatch, made before the timing), as `rebraid bench`
+/// times them.
 double time_render(const Accel& accel, const BenchRays& rays, std::vector<Hit>& hits) {
+    std::vector<glue::EmbreeRayBatch> embree_rays;
+    if (glue::EmbreeRayBatch::serves(accel)) {
+        embree_rays.emplace_back(accel, rays.primary);
+        embree_rays.emplace_back(accel, rays.diffuse);
+    }
     const auto start = std::chrono::steady_clock::now();
-    for (const std::vector<Ray>* set : {&rays.primary, &rays.diffuse}) {
-        hits.resize(set->size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set->size(), 64),
+    for (int s = 0; s < 2; ++s) {
+        const std::vector<Ray>& set = s == 0 ? rays.primary : rays.diffuse;
+        hits.resize(set.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 64),
                           [&](const tbb::blocked_range<std::size_t>& range) {
+                              if (!embree_rays.empty()) {
+                                  embree_rays[s].intersect(range.begin(), range.end());
+                                  return;
+                              }
                               for (std::size_t i = range.begin(); i != range.end(); ++i)
-                                  hits[i] = accel.intersect((*set)[i]);
+                                  hits[i] = accel.intersect(set[i]);
                           });
     }
     return milliseconds_since(start);
