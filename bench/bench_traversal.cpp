@@ -20,7 +20,8 @@
 // --leaf-size, --intersection-cost, --collapse greedy|optimal, --fill-nodes 0|1 (with greedy),
 // --max-children N, --pre-arranged-leaves 0|1: BuildSettings of the flat and object BVHs (default:
 // the builder's defaults), to measure how the tree shape changes traversal speed. Structures are
-// built once per scene, outside the timed loops.
+// built once per scene, outside the timed loops; Embree's structures are traced on rays
+// already in Embree's layout (glue::EmbreeRayBatch), converted outside them too.
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -36,10 +37,12 @@
 #include <iostream>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "embree_glue/reference/embree_ray_batch.h"
 #include "embree_glue/reference/embree_reference.h"
 #include "rebraid/core/error.h"
 #include "rebraid/generators/default_scene.h"
@@ -178,20 +181,41 @@ double now_seconds() {
         .count();
 }
 
+/// A structure and the rays it traces: the project's through Accel, Embree's from rays already
+/// in its layout (glue::EmbreeRayBatch, made before the timing), as `rebraid bench` times them.
+struct TracedRays {
+    TracedRays(const Accel& accel, const std::vector<Ray>& rays) : accel(accel), rays(rays) {
+        if (glue::EmbreeRayBatch::serves(accel)) embree_rays.emplace(accel, rays);
+    }
+    const Accel& accel;
+    const std::vector<Ray>& rays;
+    std::optional<glue::EmbreeRayBatch> embree_rays;
+};
+
 /// Traces every ray once, on the calling thread or on `settings().thread_count` threads.
-void trace_once(const Accel& accel, const std::vector<Ray>& rays, Query query,
-                std::vector<float>& sink) {
+void trace_once(TracedRays& traced, Query query, std::vector<float>& sink) {
     const auto trace_range = [&](std::size_t begin, std::size_t end) {
+        if (traced.embree_rays) {
+            glue::EmbreeRayBatch& batch = *traced.embree_rays;
+            if (query == Query::intersect) {
+                batch.intersect(begin, end);
+                for (std::size_t i = begin; i != end; ++i) sink[i] = batch.hit(i).t;
+            } else {
+                batch.occlude(begin, end);
+                for (std::size_t i = begin; i != end; ++i) sink[i] = float(batch.is_occluded(i));
+            }
+            return;
+        }
         for (std::size_t i = begin; i != end; ++i)
-            sink[i] = query == Query::intersect ? accel.intersect(rays[i]).t
-                                                : float(accel.occluded(rays[i]));
+            sink[i] = query == Query::intersect ? traced.accel.intersect(traced.rays[i]).t
+                                                : float(traced.accel.occluded(traced.rays[i]));
     };
     if (settings().thread_count == 1) {
-        trace_range(0, rays.size());
+        trace_range(0, traced.rays.size());
     } else {
         tbb::task_arena arena(settings().thread_count);
         arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024),
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, traced.rays.size(), 1024),
                               [&](const tbb::blocked_range<std::size_t>& range) {
                                   trace_range(range.begin(), range.end());
                               });
@@ -205,7 +229,8 @@ void trace_once(const Accel& accel, const std::vector<Ray>& rays, Query query,
 void trace_rays(benchmark::State& state, const Accel& accel, const std::vector<Ray>& rays,
                 Query query) {
     std::vector<float> sink(rays.size());
-    for (auto _ : state) trace_once(accel, rays, query, sink);
+    TracedRays traced(accel, rays);
+    for (auto _ : state) trace_once(traced, query, sink);
     state.counters["Mrays/s"] = benchmark::Counter(
         double(rays.size()) * double(state.iterations()) * 1e-6, benchmark::Counter::kIsRate);
     // Work per ray for the project's structures (Embree does not report it), outside timing.
@@ -225,10 +250,13 @@ void compare_accels(benchmark::State& state, const SceneFixture& fixture, const 
     const std::vector<Ray>& rays = rays_of(fixture, kind);
     std::vector<float> sink(rays.size());
     std::vector<double> best(std::size(kAccelNames), 1e30);
+    std::vector<TracedRays> traced;
+    traced.reserve(std::size(kAccelNames));
+    for (const char* name : kAccelNames) traced.emplace_back(fixture.accel(name), rays);
     for (auto _ : state) {
         for (std::size_t a = 0; a < std::size(kAccelNames); ++a) {
             const double start = now_seconds();
-            trace_once(fixture.accel(kAccelNames[a]), rays, kind.query, sink);
+            trace_once(traced[a], kind.query, sink);
             best[a] = std::min(best[a], now_seconds() - start);
         }
     }
