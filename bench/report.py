@@ -308,8 +308,9 @@ def section_instructions(runs):
     out = ["## Table 1c: instructions per ray\n",
            "Exact instruction counts, free of the timing noise of a shared machine\n"
            "(`bench/tools/count_instructions.py`): callgrind counts the instructions of a\n"
-           "single-threaded loop (`build/bench/trace_rays`) that finds every ray's closest hit and\n"
-           "then its occlusion, so a figure is closest hit + occluded per ray, without the build.\n"
+           "single-threaded loop (`build/bench/trace_rays`) that finds every ray's closest hit,\n"
+           "then every ray's occlusion, so a figure is closest hit + occluded per ray, without the\n"
+           "build.\n"
            "valgrind emulates no AVX-512, so Embree runs its AVX2 kernels and the project's\n"
            "structures theirs: both sides compare at AVX2. The rays are the bench's own, written\n"
            f"by `rebraid bench --save-rays`: {rays['primary']} primary and {rays['diffuse']}\n"

@@ -7,8 +7,8 @@ SCENE is a glTF file or `default`. The tool writes the bench's rays with
 `rebraid bench SCENE --save-rays` (N primary rays of the auto-framed camera and N diffuse
 bounce rays, as `rebraid bench` traces them) into a temporary folder, then runs
 `build/bench/trace_rays SCENE PRIMARY DIFFUSE ACCEL` under callgrind once per structure: one
-build, then one `trace_all` call per ray file, each finding every ray's closest hit and its
-occlusion. callgrind dumps its counts on every entry into trace_all, so each ray file's
+build, then one `trace_all` call per ray file, each finding every ray's closest hit, then
+every ray's occlusion (Embree's structures on rays already in Embree's layout). callgrind dumps its counts on every entry into trace_all, so each ray file's
 instructions are trace_all's inclusive cost in its own dump: the tracing only, without the
 scene loading and the build (which valgrind still emulates, slowly). It prints one JSON
 object: instructions per primary and per diffuse ray of each structure, the ray and hit counts

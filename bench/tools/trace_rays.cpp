@@ -49,8 +49,9 @@ struct TracedAccel {
     std::optional<rebraid::glue::EmbreeRayBatch> embree_rays;
 };
 
-/// Every ray's closest hit and (unless `closest_only`) occlusion; not inlined, so callgrind
-/// can count it alone.
+/// Every ray's closest hit, then (unless `closest_only`) every ray's occlusion; not inlined,
+/// so callgrind can count it alone. Embree's batch traces each pass in one call, as
+/// `rebraid bench` traces a block.
 [[gnu::noinline]] TraceSummary trace_all(TracedAccel& traced, const std::vector<rebraid::Ray>& rays,
                                          bool closest_only) {
     TraceSummary summary;
@@ -61,19 +62,16 @@ struct TracedAccel {
     };
     if (traced.embree_rays) {
         rebraid::glue::EmbreeRayBatch& batch = *traced.embree_rays;
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-            batch.intersect(i, i + 1);
-            add_hit(batch.hit(i));
-            if (closest_only) continue;
-            batch.occlude(i, i + 1);
-            summary.occluded += batch.is_occluded(i);
-        }
+        batch.intersect(0, rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i) add_hit(batch.hit(i));
+        if (closest_only) return summary;
+        batch.occlude(0, rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i) summary.occluded += batch.is_occluded(i);
         return summary;
     }
-    for (const rebraid::Ray& ray : rays) {
-        add_hit(traced.accel.intersect(ray));
-        if (!closest_only) summary.occluded += traced.accel.occluded(ray);
-    }
+    for (const rebraid::Ray& ray : rays) add_hit(traced.accel.intersect(ray));
+    if (closest_only) return summary;
+    for (const rebraid::Ray& ray : rays) summary.occluded += traced.accel.occluded(ray);
     return summary;
 }
 

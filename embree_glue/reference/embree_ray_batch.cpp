@@ -1,10 +1,8 @@
 #include "embree_glue/reference/embree_ray_batch.h"
 
 #include <functional>
-#include <limits>
 
 #include "embree_glue/reference/embree_dynamic_scene.h"
-#include "embree_glue/reference/embree_geometry.h"
 #include "embree_glue/reference/embree_reference.h"
 #include "rebraid/core/error.h"
 
@@ -69,14 +67,6 @@ void EmbreeRayBatch::occlude(std::size_t begin, std::size_t end) {
         ray.tfar = input_tfar_[i];
         if (is_traced_[i]) rtcOccluded1(scene_, &context, &ray);
     }
-}
-
-bool EmbreeRayBatch::is_occluded(std::size_t i) const {
-    return rays_[i].ray.tfar == -std::numeric_limits<float>::infinity();
-}
-
-Hit EmbreeRayBatch::hit(std::size_t i) const {
-    return hit_from_embree(rays_[i], instance_id_is_inst_id_);
 }
 
 }  // namespace rebraid::glue

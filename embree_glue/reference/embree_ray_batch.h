@@ -4,9 +4,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
+#include "embree_glue/reference/embree_geometry.h"
 #include "rebraid/core/accel.h"
 #include "rebraid/core/ray.h"
 
@@ -39,11 +41,13 @@ public:
     void occlude(std::size_t begin, std::size_t end);
 
     /// Whether ray `i` was found occluded by the last occlude over it.
-    bool is_occluded(std::size_t i) const;
+    bool is_occluded(std::size_t i) const {
+        return rays_[i].ray.tfar == -std::numeric_limits<float>::infinity();
+    }
 
     /// Ray `i`'s closest hit after intersect (and before an occlude over it), in the
     /// project's terms (as accel.intersect would give it).
-    Hit hit(std::size_t i) const;
+    Hit hit(std::size_t i) const { return hit_from_embree(rays_[i], instance_id_is_inst_id_); }
 
     std::size_t size() const { return rays_.size(); }
 
