@@ -1,6 +1,7 @@
 #include "embree_glue/reference/embree_ray_batch.h"
 
 #include <functional>
+#include <optional>
 
 #include "embree_glue/reference/embree_dynamic_scene.h"
 #include "embree_glue/reference/embree_reference.h"
@@ -8,38 +9,50 @@
 
 namespace rebraid::glue {
 
+namespace {
+
+/// What a batch needs of one of Embree's reference structures: its scene, how its hits name
+/// instances, and which rays it hands to Embree (its own rule and errors).
+struct BatchTarget {
+    RTCScene scene = nullptr;
+    bool instance_id_is_inst_id = false;
+    std::function<bool(const Ray&)> is_traced;
+};
+
+/// The one list of structures a batch serves; empty for any other.
+std::optional<BatchTarget> batch_target(const Accel& accel) {
+    if (const auto* flat = dynamic_cast<const EmbreeFlatAccel*>(&accel))
+        return BatchTarget{flat->rtc_scene(), false, [limits = flat->ray_limits()](const Ray& ray) {
+                               return is_traced_by_embree(ray, limits, "EmbreeFlatAccel");
+                           }};
+    if (const auto* instanced = dynamic_cast<const EmbreeInstancedAccel*>(&accel))
+        return BatchTarget{instanced->rtc_scene(), true,
+                           [limits = instanced->ray_limits()](const Ray& ray) {
+                               return is_traced_by_embree(ray, limits, "EmbreeInstancedAccel");
+                           }};
+    if (const auto* dynamic = dynamic_cast<const EmbreeDynamicAccel*>(&accel))
+        return BatchTarget{dynamic->rtc_scene(), dynamic->names_instances_by_inst_id(),
+                           &EmbreeDynamicAccel::is_traced_by_embree};
+    return std::nullopt;
+}
+
+}  // namespace
+
 bool EmbreeRayBatch::serves(const Accel& accel) {
-    return dynamic_cast<const EmbreeFlatAccel*>(&accel) != nullptr ||
-           dynamic_cast<const EmbreeInstancedAccel*>(&accel) != nullptr ||
-           dynamic_cast<const EmbreeDynamicAccel*>(&accel) != nullptr;
+    return batch_target(accel).has_value();
 }
 
 EmbreeRayBatch::EmbreeRayBatch(const Accel& accel, std::span<const Ray> rays) {
-    // Which rays reach Embree: each structure's own rule (and its errors).
-    std::function<bool(const Ray&)> is_traced;
-    if (const auto* flat = dynamic_cast<const EmbreeFlatAccel*>(&accel)) {
-        scene_ = flat->rtc_scene();
-        is_traced = [limits = flat->ray_limits()](const Ray& ray) {
-            return is_traced_by_embree(ray, limits, "EmbreeFlatAccel");
-        };
-    } else if (const auto* instanced = dynamic_cast<const EmbreeInstancedAccel*>(&accel)) {
-        scene_ = instanced->rtc_scene();
-        instance_id_is_inst_id_ = true;
-        is_traced = [limits = instanced->ray_limits()](const Ray& ray) {
-            return is_traced_by_embree(ray, limits, "EmbreeInstancedAccel");
-        };
-    } else if (const auto* dynamic = dynamic_cast<const EmbreeDynamicAccel*>(&accel)) {
-        scene_ = dynamic->rtc_scene();
-        instance_id_is_inst_id_ = dynamic->names_instances_by_inst_id();
-        is_traced = &EmbreeDynamicAccel::is_traced_by_embree;
-    } else {
+    std::optional<BatchTarget> target = batch_target(accel);
+    if (!target)
         throw Error("EmbreeRayBatch: the structure is not one of Embree's reference structures");
-    }
+    scene_ = target->scene;
+    instance_id_is_inst_id_ = target->instance_id_is_inst_id;
     rays_.resize(rays.size());
     input_tfar_.resize(rays.size());
     is_traced_.resize(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) {
-        is_traced_[i] = is_traced(rays[i]) ? 1 : 0;
+        is_traced_[i] = target->is_traced(rays[i]) ? 1 : 0;
         rays_[i].ray = to_embree_ray(rays[i]);
         input_tfar_[i] = rays[i].tfar;
         rays_[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
