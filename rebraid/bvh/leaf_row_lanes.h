@@ -27,6 +27,7 @@ public:
         const std::uint32_t first = leaf.first_prim(), count = leaf.prim_count();
         const float* base = leaf_rows_at(rows_, first);
         if (count_ + count <= kTriangleGroupSize) {  // the common case: the leaf fits
+            if (count_ == 0) first_rows_ = {base, count};
             segments_[segment_count_++] = {base, count, count_, first};
             count_ += count;
             return;
@@ -34,6 +35,7 @@ public:
         for (std::uint32_t done = 0; done < count;) {
             if (count_ == kTriangleGroupSize) on_full();
             const std::uint32_t take = std::min(count - done, kTriangleGroupSize - count_);
+            if (count_ == 0) first_rows_ = {base + done, count};
             segments_[segment_count_++] = {base + done, count, count_, first + done};
             count_ += take;
             done += take;
@@ -44,9 +46,8 @@ public:
     const float* rows() const { return rows_; }
     /// The 9 corner rows of the gathered triangles (lanes past count() hold arbitrary values).
     void load_rows(__m256 (&rows)[9]) const {
-        const Segment& first = segments_[0];  // starts at lane 0
         for (std::uint32_t r = 0; r < kCornerRows; ++r)
-            rows[r] = _mm256_loadu_ps(first.base + std::size_t(r) * first.stride);
+            rows[r] = _mm256_loadu_ps(first_rows_.base + std::size_t(r) * first_rows_.stride);
         for (std::uint32_t s = 1; s < segment_count_; ++s) {
             const Segment& segment = segments_[s];
             // Lanes from segment.lane on; later segments overwrite the lanes past this one.
@@ -114,7 +115,15 @@ private:
     /// Sign bits set from index 8 on: 8 floats read from kLanesFrom + 8 - k select lanes k..7.
     static constexpr float kLanesFrom[16] = {
         0, 0, 0, 0, 0, 0, 0, 0, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f, -0.0f};
+    /// The rows of the segment in lane 0, besides segments_[0]: kept in members of their own,
+    /// which the compiler holds in registers, the row loads of a test wait on no reload of
+    /// what add() has just stored in the segment array.
+    struct FirstRows {
+        const float* base;
+        std::uint32_t stride;
+    };
     const float* rows_;
+    FirstRows first_rows_{nullptr, 0};
     Segment segments_[kTriangleGroupSize];  // left uninitialised: filled as used
     std::uint32_t count_ = 0, segment_count_ = 0;
 };
