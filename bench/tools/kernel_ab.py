@@ -5,6 +5,7 @@ noise between processes.
 
   python3 bench/tools/kernel_ab.py REVISION SCENE RAYS ACCEL [--rounds N] [--located]
                                    [--build DIR] [--isa avx2|avx512]
+                                   [--current-flags FLAGS]
 
 REVISION is a git revision; SCENE a glTF file or `default`; RAYS a ray file (`rebraid bench
 --save-rays`, `rebraid rays`); ACCEL one of the project's structures as `rebraid bench --accel`
@@ -101,6 +102,9 @@ def main():
     parser.add_argument("--located", action="store_true",
                         help="the located query (the Embree glue's) instead of the plain one")
     parser.add_argument("--build", default=repo_path("build"))
+    parser.add_argument("--current-flags", default="",
+                        help="extra compiler flags for the working tree's kernels only "
+                             "(e.g. to measure a code-layout flag against the same source)")
     parser.add_argument("--isa", choices=sorted(ISA_FLAGS),
                         default="avx512" if cpu_has_avx512() else "avx2")
     args = parser.parse_args()
@@ -114,7 +118,8 @@ def main():
         objects = []
         for name, include in (("earlier", earlier), ("current", repo_path("."))):
             objects.append(os.path.join(work, name + ".o"))
-            run([compiler, *flags, "-I", include, f"-DKERNEL_AB_RUN=run_{name}", "-c",
+            extra = shlex.split(args.current_flags) if name == "current" else []
+            run([compiler, *flags, *extra, "-I", include, f"-DKERNEL_AB_RUN=run_{name}", "-c",
                  os.path.join(sources, "kernels.cpp"), "-o", objects[-1]])
         objects.append(os.path.join(work, "driver.o"))
         run([compiler, "-O2", "-std=c++20", "-I", repo_path(os.path.join("examples", "cli")),
