@@ -112,7 +112,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
             __builtin_prefetch(node.children);
             if (counters) ++counters->nodes_visited;
             alignas(32) float distances[kBvhWidth];
-            unsigned mask = box_test(node, ray.tnear, ray.tfar, distances);
+            unsigned mask = box_test(node, ray.tfar, distances);
             if constexpr (kWithSiblings || kByNode) {
                 bool node_takes_siblings = true;
                 if constexpr (kByNode)
