@@ -24,7 +24,9 @@ The two copies sit at different addresses, which alone moves the ratio by up to 
 Only revisions whose structures have the working tree's layout can be compared (the earlier
 kernels read the structure the current library built): not across a change of WideNode, the
 leaf rows or the top level's records. --isa picks the instruction set the kernels are compiled
-for (default: avx512 where the CPU has it, as the library's kernel levels choose).
+for (default: avx512 where the CPU has it, as the library's kernel levels choose);
+--current-flags adds compiler flags to the working tree's copy only, so that a code-layout or
+optimisation flag is measured against the same source without it.
 
 Python 3.11 standard library only; needs git and the C++ compiler the build uses.
 """
