@@ -46,6 +46,8 @@ struct BenchOptions {
     bool is_json = false;
     /// Folder the rays are written to, or empty (see --save-rays).
     std::string save_rays_dir;
+    /// Build, time and free each structure in turn (see --one-at-a-time).
+    bool one_at_a_time = false;
 };
 
 /// The ray files --save-rays writes for the scene at `path` (empty: the default scene):
@@ -64,46 +66,68 @@ struct TraceTiming {
     std::size_t hit_count = 0;
 };
 
-/// Traces `rays` (closest hit) in parallel once to warm up (caches, page faults, TBB's
-/// workers), then `repetitions` times; the median time gives the rate. Each structure is
-/// queried as its users query it: the project's through Accel::intersect, Embree's by
-/// rtcIntersect1 on rays already in its layout (glue::EmbreeRayBatch, converted before the
-/// timing: the Accel wrapper's conversions would count against Embree). Not inlined, so
-/// profilers can attribute each call to its ray set (e.g. valgrind
-/// --dump-after=*time_closest_hits* writes one profile per call: primary, then diffuse).
-[[gnu::noinline]] TraceTiming time_closest_hits(const Accel& accel, const std::vector<Ray>& rays,
-                                                int repetitions) {
-    if (rays.empty()) return {};
-    std::vector<Hit> hits(rays.size());  // written, so no trace can be optimised away
-    std::optional<glue::EmbreeRayBatch> embree_rays;
-    if (glue::EmbreeRayBatch::serves(accel)) embree_rays.emplace(accel, rays);
-    const auto trace_once = [&] {
+/// The median of `seconds` (not empty).
+double median_of(std::vector<double> seconds) {
+    std::sort(seconds.begin(), seconds.end());
+    const std::size_t middle = seconds.size() / 2;
+    return seconds.size() % 2 == 1 ? seconds[middle]
+                                   : 0.5 * (seconds[middle - 1] + seconds[middle]);
+}
+
+/// Closest-hit throughput of each of `accels` on `rays`: each traces them (in parallel) once
+/// to warm up (caches, page faults, TBB's workers), then the structures take turns,
+/// `repetitions` passes each, and each one's median time gives its rate. Taking turns, a
+/// machine whose speed drifts during the measurement (another tenant, the clock) slows every
+/// structure alike, where timing one structure after the other moved their ratios by up to a
+/// fifth between processes. Each structure is queried as its users query it: the project's
+/// through Accel::intersect, Embree's by rtcIntersect1 on rays already in its layout
+/// (glue::EmbreeRayBatch, converted before the timing: the Accel wrapper's conversions would
+/// count against Embree). Not inlined, so profilers can attribute each call to its ray set
+/// (e.g. valgrind --dump-after=*time_closest_hits* writes one profile per call: primary, then
+/// diffuse).
+[[gnu::noinline]] std::vector<TraceTiming> time_closest_hits(
+    const std::vector<const Accel*>& accels, const std::vector<Ray>& rays, int repetitions) {
+    std::vector<TraceTiming> timings(accels.size());
+    if (rays.empty()) return timings;
+    struct Timed {
+        const Accel& accel;
+        std::vector<Hit> hits;  // written, so no trace can be optimised away
+        std::optional<glue::EmbreeRayBatch> embree_rays;
+        std::vector<double> seconds;
+    };
+    std::vector<Timed> timed;
+    timed.reserve(accels.size());
+    for (const Accel* accel : accels) {
+        Timed& entry = timed.emplace_back(Timed{*accel, std::vector<Hit>(rays.size()), {}, {}});
+        if (glue::EmbreeRayBatch::serves(*accel)) entry.embree_rays.emplace(*accel, rays);
+    }
+    const auto trace_once = [&rays](Timed& entry) {
         const auto start = std::chrono::steady_clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 64),
                           [&](const tbb::blocked_range<std::size_t>& range) {
-                              if (embree_rays) {
-                                  embree_rays->intersect(range.begin(), range.end());
+                              if (entry.embree_rays) {
+                                  entry.embree_rays->intersect(range.begin(), range.end());
                                   return;
                               }
                               for (std::size_t i = range.begin(); i != range.end(); ++i)
-                                  hits[i] = accel.intersect(rays[i]);
+                                  entry.hits[i] = entry.accel.intersect(rays[i]);
                           });
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     };
-    trace_once();
-    std::vector<double> seconds;
-    for (int i = 0; i < repetitions; ++i) seconds.push_back(trace_once());
-    std::sort(seconds.begin(), seconds.end());
-    const std::size_t middle = seconds.size() / 2;
-    const double median =
-        seconds.size() % 2 == 1 ? seconds[middle] : 0.5 * (seconds[middle - 1] + seconds[middle]);
-    if (embree_rays)
-        for (std::size_t i = 0; i < rays.size(); ++i) hits[i] = embree_rays->hit(i);
-    TraceTiming timing;
-    timing.mrays_per_second = static_cast<double>(rays.size()) / std::max(median, 1e-9) / 1e6;
-    timing.hit_count = static_cast<std::size_t>(
-        std::count_if(hits.begin(), hits.end(), [](const Hit& hit) { return hit.is_hit(); }));
-    return timing;
+    for (Timed& entry : timed) trace_once(entry);
+    for (int i = 0; i < repetitions; ++i)
+        for (Timed& entry : timed) entry.seconds.push_back(trace_once(entry));
+    for (std::size_t a = 0; a < timed.size(); ++a) {
+        Timed& entry = timed[a];
+        if (entry.embree_rays)
+            for (std::size_t i = 0; i < rays.size(); ++i) entry.hits[i] = entry.embree_rays->hit(i);
+        TraceTiming& timing = timings[a];
+        timing.mrays_per_second =
+            static_cast<double>(rays.size()) / std::max(median_of(entry.seconds), 1e-9) / 1e6;
+        timing.hit_count = static_cast<std::size_t>(std::count_if(
+            entry.hits.begin(), entry.hits.end(), [](const Hit& hit) { return hit.is_hit(); }));
+    }
+    return timings;
 }
 
 /// Work per ray of one structure on one ray set, counted in an untimed pass
@@ -165,6 +189,7 @@ nlohmann::ordered_json result_to_json(const BenchResult& result, const BenchRays
     json["object_entries_per_diffuse_ray"] = work_field(&TraceWork::object_entries_per_ray);
     json["threads"] = active_thread_count();
     json["repetitions"] = options.repetitions;
+    json["timing"] = options.one_at_a_time ? "one_at_a_time" : "taking_turns";
     return json;
 }
 
@@ -172,11 +197,12 @@ void print_scene_header(const std::string& scene_name, const Scene& scene, const
                         const BenchOptions& options, int name_width) {
     std::printf(
         "%s: %llu triangles, %zu instances, %zu meshes; %zu primary rays (%dx%d, %zu hit) and "
-        "%zu diffuse rays; %zu threads; Mrays/s from the median of %d runs after 1 warm-up\n",
+        "%zu diffuse rays; %zu threads; Mrays/s from the median of %d runs after 1 warm-up, %s\n",
         scene_name.c_str(), static_cast<unsigned long long>(scene.instanced_triangle_count()),
         scene.instances.size(), scene.meshes.size(), rays.primary.size(), rays.image_width,
         rays.image_height, rays.primary_hit_count, rays.diffuse.size(), active_thread_count(),
-        options.repetitions);
+        options.repetitions,
+        options.one_at_a_time ? "each structure alone" : "the structures taking turns");
     std::printf("  %-*s %10s %10s %8s %10s %10s %10s %10s\n", name_width, "accel", "build_ms",
                 "top_ms", "sah", "nodes", "memory_MB", "Mrays_pri", "Mrays_dif");
 }
@@ -256,31 +282,67 @@ void run_bench(const BenchOptions& options) {
         }
         status.clear();
         if (!options.is_json) print_scene_header(scene_name, scene, rays, options, name_width);
-        for (std::size_t v = 0; v < variants.size(); ++v) {
-            const AccelVariant& variant = variants[v];
-            const std::string step = scene_step + ", " + variant.label + " (" +
-                                     std::to_string(v + 1) + "/" + std::to_string(variants.size()) +
-                                     "): ";
-            BenchResult result{scene_name, &variant, {}, {}, {}, {}};
-            {
-                status.show(step + "building");
-                const std::unique_ptr<Accel> accel = variant.entry->build(scene, variant.options);
-                result.stats = accel->stats();
-                status.show(step + "timing primary rays");
-                result.primary = time_closest_hits(*accel, rays.primary, options.repetitions);
-                status.show(step + "timing diffuse rays");
-                result.diffuse = time_closest_hits(*accel, rays.diffuse, options.repetitions);
-                if (options.is_json) {
-                    status.show(step + "counting work per ray");
-                    result.diffuse_work = count_closest_hit_work(*accel, rays.diffuse);
-                }
-            }  // freed before the next structure is built
-            status.clear();
+        const auto step_of = [&](std::size_t v) {
+            return scene_step + ", " + variants[v].label + " (" + std::to_string(v + 1) + "/" +
+                   std::to_string(variants.size()) + "): ";
+        };
+        std::vector<BenchResult> results;
+        for (const AccelVariant& variant : variants)
+            results.push_back(BenchResult{scene_name, &variant, {}, {}, {}, {}});
+        const auto report = [&](const BenchResult& result) {
             if (options.is_json)
                 all_results.push_back(result_to_json(result, rays, options));
             else
                 print_result_row(result, name_width);
+        };
+        if (options.one_at_a_time) {
+            for (std::size_t v = 0; v < variants.size(); ++v) {
+                BenchResult& result = results[v];
+                {
+                    status.show(step_of(v) + "building");
+                    const std::unique_ptr<Accel> accel =
+                        variants[v].entry->build(scene, variants[v].options);
+                    result.stats = accel->stats();
+                    const std::vector<const Accel*> alone = {accel.get()};
+                    status.show(step_of(v) + "timing primary rays");
+                    result.primary = time_closest_hits(alone, rays.primary, options.repetitions)[0];
+                    status.show(step_of(v) + "timing diffuse rays");
+                    result.diffuse = time_closest_hits(alone, rays.diffuse, options.repetitions)[0];
+                    if (options.is_json) {
+                        status.show(step_of(v) + "counting work per ray");
+                        result.diffuse_work = count_closest_hit_work(*accel, rays.diffuse);
+                    }
+                }  // freed before the next structure is built
+                status.clear();
+                report(result);
+            }
+            continue;
         }
+        std::vector<std::unique_ptr<Accel>> accels;
+        std::vector<const Accel*> timed;
+        for (std::size_t v = 0; v < variants.size(); ++v) {
+            status.show(step_of(v) + "building");
+            accels.push_back(variants[v].entry->build(scene, variants[v].options));
+            results[v].stats = accels.back()->stats();
+            timed.push_back(accels.back().get());
+        }
+        status.show(scene_step + ": timing primary rays, the structures taking turns");
+        const std::vector<TraceTiming> primary =
+            time_closest_hits(timed, rays.primary, options.repetitions);
+        status.show(scene_step + ": timing diffuse rays, the structures taking turns");
+        const std::vector<TraceTiming> diffuse =
+            time_closest_hits(timed, rays.diffuse, options.repetitions);
+        for (std::size_t v = 0; v < variants.size(); ++v) {
+            results[v].primary = primary[v];
+            results[v].diffuse = diffuse[v];
+            if (options.is_json) {
+                status.show(step_of(v) + "counting work per ray");
+                results[v].diffuse_work = count_closest_hit_work(*accels[v], rays.diffuse);
+            }
+        }
+        accels.clear();
+        status.clear();
+        for (const BenchResult& result : results) report(result);
     }
     if (options.is_json) std::cout << all_results.dump(2) << "\n";
 }
@@ -325,6 +387,11 @@ void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& acti
     command->add_option("--seed", options->rays.seed, "seed of the diffuse directions")
         ->check(whole_number(0, std::numeric_limits<std::int64_t>::max()))
         ->capture_default_str();
+    command->add_flag("--one-at-a-time", options->one_at_a_time,
+                      "build, time and free each structure before the next is built, for "
+                      "scenes whose structures do not fit in memory together (default: all are "
+                      "built first, then timed taking turns, so that a drift in the machine's "
+                      "speed slows each alike)");
     command->add_flag("--json", options->is_json,
                       "print one JSON array: an object per scene and structure (scene, accel, "
                       "build_ms, sah, mrays_primary, mrays_diffuse, the stats fields, nodes, "

@@ -117,6 +117,41 @@ TEST(CliBench, TableListsTheChosenStructuresWithTheirBuilder) {
     EXPECT_EQ(result.out.find("rebraid "), std::string::npos) << result.out;
 }
 
+TEST(CliBench, TakingTurnsAndOneAtATimeMeasureTheSameStructures) {
+    const auto bench = [](bool one_at_a_time) {
+        std::vector<std::string> args = {"bench",         shared_scene("motion_capture_rom.glb"),
+                                         "--rays",        "300",
+                                         "--repetitions", "2",
+                                         "--accel",       "embree-flat,flat,rebraid",
+                                         "--json"};
+        if (one_at_a_time) args.push_back("--one-at-a-time");
+        const CommandResult result =
+            test::run_rebraid_in(test::test_scratch_dir("cli_bench_test"), args);
+        EXPECT_EQ(result.exit_code, 0) << result.err;
+        return nlohmann::json::parse(result.out);
+    };
+    const nlohmann::json turns = bench(false);
+    const nlohmann::json alone = bench(true);
+    ASSERT_EQ(turns.size(), 3u);
+    ASSERT_EQ(alone.size(), 3u);
+    for (std::size_t i = 0; i < turns.size(); ++i) {
+        const nlohmann::json& a = turns[i];
+        const nlohmann::json& b = alone[i];
+        EXPECT_EQ(a.at("timing"), "taking_turns");
+        EXPECT_EQ(b.at("timing"), "one_at_a_time");
+        // Each row still describes its own structure, whichever way it was timed.
+        EXPECT_EQ(a.at("accel"), b.at("accel"));
+        for (const char* key : {"hits_primary", "hits_diffuse", "nodes_per_diffuse_ray",
+                                "triangles_per_diffuse_ray", "object_entries_per_diffuse_ray"})
+            EXPECT_EQ(a.at(key), b.at(key)) << a.at("accel") << " " << key;
+        EXPECT_EQ(a.value("structure_hash", nlohmann::json()),
+                  b.value("structure_hash", nlohmann::json()))
+            << a.at("accel");
+        EXPECT_GT(a.at("mrays_primary").get<double>(), 0.0) << a.at("accel");
+        EXPECT_GT(a.at("mrays_diffuse").get<double>(), 0.0) << a.at("accel");
+    }
+}
+
 TEST(CliBench, SavedRaysAreTheRaysItTraced) {
     const fs::path dir = test::test_scratch_dir("cli_bench_test") / "saved_rays";
     fs::remove_all(dir);
