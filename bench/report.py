@@ -205,10 +205,11 @@ def section_method(runs):
   through each: primary rays of the auto-framed camera (one per pixel of a 16:9 image) and as
   many diffuse bounce rays from their hit points (cosine-distributed, fixed seed). Mrays/s is
   closest-hit throughput on {thread_text}: the median of the timed runs after one warm-up.
-  All structures of a scene are built first and then timed taking turns (one pass each, in
-  order, as often as the runs), so that a drift in the machine's speed during the process
-  slows each alike (results collected before this was so timed one structure after the other:
-  their `timing` field says which).
+  All structures of a scene are built first and then timed taking turns (in order, each an
+  untimed pass and a timed one, as often as the runs), so that a drift in the machine's speed
+  during the process slows each alike, while each timed pass finds its structure in the
+  caches, as one timed alone does (results collected before this timed one structure after
+  the other: their `timing` field says which).
 - Each round is a separate process on the same rays. Tables show the median over the rounds;
   a ratio of two structures is computed within each round and the median of those ratios is
   shown.

@@ -74,9 +74,9 @@ double median_of(std::vector<double> seconds) {
                                    : 0.5 * (seconds[middle - 1] + seconds[middle]);
 }
 
-/// Closest-hit throughput of each of `accels` on `rays`: each traces them (in parallel) once
-/// to warm up (caches, page faults, TBB's workers), then the structures take turns,
-/// `repetitions` passes each, and each one's median time gives its rate. Taking turns, a
+/// Closest-hit throughput of each of `accels` on `rays`: the structures take turns, each
+/// tracing the rays (in parallel) once to warm up (caches, page faults, TBB's workers) and once
+/// timed, `repetitions` times, and each one's median time gives its rate. Taking turns, a
 /// machine whose speed drifts during the measurement (another tenant, the clock) slows every
 /// structure alike, where timing one structure after the other moved their ratios by up to a
 /// fifth between processes. Each structure is queried as its users query it: the project's
@@ -114,9 +114,13 @@ double median_of(std::vector<double> seconds) {
                           });
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     };
-    for (Timed& entry : timed) trace_once(entry);
+    // Each timed pass follows an untimed one of the same structure: it finds the structure in
+    // the caches, as a structure timed alone does, instead of what the one before it left.
     for (int i = 0; i < repetitions; ++i)
-        for (Timed& entry : timed) entry.seconds.push_back(trace_once(entry));
+        for (Timed& entry : timed) {
+            trace_once(entry);
+            entry.seconds.push_back(trace_once(entry));
+        }
     for (std::size_t a = 0; a < timed.size(); ++a) {
         Timed& entry = timed[a];
         if (entry.embree_rays)
@@ -197,7 +201,8 @@ void print_scene_header(const std::string& scene_name, const Scene& scene, const
                         const BenchOptions& options, int name_width) {
     std::printf(
         "%s: %llu triangles, %zu instances, %zu meshes; %zu primary rays (%dx%d, %zu hit) and "
-        "%zu diffuse rays; %zu threads; Mrays/s from the median of %d runs after 1 warm-up, %s\n",
+        "%zu diffuse rays; %zu threads; Mrays/s from the median of %d runs, each after a warm-up "
+        "run, %s\n",
         scene_name.c_str(), static_cast<unsigned long long>(scene.instanced_triangle_count()),
         scene.instances.size(), scene.meshes.size(), rays.primary.size(), rays.image_width,
         rays.image_height, rays.primary_hit_count, rays.diffuse.size(), active_thread_count(),
@@ -381,7 +386,7 @@ void add_bench_command(CLI::App& app, CommonOptions& common, CommandAction& acti
         ->type_name("N");
     command
         ->add_option("--repetitions", options->repetitions,
-                     "timed runs per ray set after one warm-up; the median counts")
+                     "timed runs per ray set, each after an untimed warm-up run; the median counts")
         ->check(whole_number(1, 1000))
         ->capture_default_str();
     command->add_option("--seed", options->rays.seed, "seed of the diffuse directions")
