@@ -43,35 +43,46 @@ struct TraceSummary {
 };
 
 /// A structure as this tool traces it: the project's through Accel, Embree's on rays already
-/// in its layout (glue::EmbreeRayBatch), as `rebraid bench` times them.
+/// in its layout (glue::EmbreeRayBatch), as `rebraid bench` times them. Each keeps its answers
+/// in its own form (Hit, or the batch's RTCRayHit), read only after the trace.
 struct TracedAccel {
     const rebraid::Accel& accel;
     std::optional<rebraid::glue::EmbreeRayBatch> embree_rays;
+    std::vector<rebraid::Hit> hits;       // the project's structures
+    std::vector<unsigned char> occluded;  // the project's structures
 };
 
-/// Every ray's closest hit, then (unless `closest_only`) every ray's occlusion; not inlined,
-/// so callgrind can count it alone. Embree's batch traces each pass in one call, as
-/// `rebraid bench` traces a block.
-[[gnu::noinline]] TraceSummary trace_all(TracedAccel& traced, const std::vector<rebraid::Ray>& rays,
-                                         bool closest_only) {
-    TraceSummary summary;
-    const auto add_hit = [&](const rebraid::Hit& hit) {
-        if (!hit.is_hit()) return;
-        ++summary.hits;
-        summary.t_sum += hit.t;
-    };
+/// Every ray's closest hit, then (unless `closest_only`) every ray's occlusion, each answer
+/// stored as the structure gives it (no conversion of Embree's hits is counted or timed, as
+/// `rebraid bench` converts them after its timing); not inlined, so callgrind can count it
+/// alone. Embree's batch traces each pass in one call, as `rebraid bench` traces a block.
+[[gnu::noinline]] void trace_all(TracedAccel& traced, const std::vector<rebraid::Ray>& rays,
+                                 bool closest_only) {
     if (traced.embree_rays) {
         rebraid::glue::EmbreeRayBatch& batch = *traced.embree_rays;
         batch.intersect(0, rays.size());
-        for (std::size_t i = 0; i < rays.size(); ++i) add_hit(batch.hit(i));
-        if (closest_only) return summary;
-        batch.occlude(0, rays.size());
-        for (std::size_t i = 0; i < rays.size(); ++i) summary.occluded += batch.is_occluded(i);
-        return summary;
+        if (!closest_only) batch.occlude(0, rays.size());
+        return;
     }
-    for (const rebraid::Ray& ray : rays) add_hit(traced.accel.intersect(ray));
-    if (closest_only) return summary;
-    for (const rebraid::Ray& ray : rays) summary.occluded += traced.accel.occluded(ray);
+    for (std::size_t i = 0; i < rays.size(); ++i) traced.hits[i] = traced.accel.intersect(rays[i]);
+    if (closest_only) return;
+    for (std::size_t i = 0; i < rays.size(); ++i)
+        traced.occluded[i] = traced.accel.occluded(rays[i]) ? 1 : 0;
+}
+
+/// What the last trace_all of `traced` found over `count` rays.
+TraceSummary summarize(const TracedAccel& traced, std::size_t count, bool closest_only) {
+    TraceSummary summary;
+    for (std::size_t i = 0; i < count; ++i) {
+        const rebraid::Hit hit = traced.embree_rays ? traced.embree_rays->hit(i) : traced.hits[i];
+        if (!hit.is_hit()) continue;
+        ++summary.hits;
+        summary.t_sum += hit.t;
+    }
+    if (!closest_only)
+        for (std::size_t i = 0; i < count; ++i)
+            summary.occluded +=
+                traced.embree_rays ? traced.embree_rays->is_occluded(i) : traced.occluded[i] != 0;
     return summary;
 }
 
@@ -138,13 +149,20 @@ int main(int argc, char** argv) {
         for (const std::vector<rebraid::Ray>& rays : ray_sets) {
             std::vector<TracedAccel> traced;
             for (const auto& accel : accels) {
-                traced.push_back({*accel, std::nullopt});
-                if (rebraid::glue::EmbreeRayBatch::serves(*accel))
+                traced.push_back({*accel, std::nullopt, {}, {}});
+                if (rebraid::glue::EmbreeRayBatch::serves(*accel)) {
                     traced.back().embree_rays.emplace(*accel, rays);
+                } else {
+                    traced.back().hits.resize(rays.size());
+                    traced.back().occluded.resize(rays.size());
+                }
             }
             // The untimed pass of each structure is also the timed rounds' warm-up.
             std::vector<TraceSummary> summaries;
-            for (TracedAccel& t : traced) summaries.push_back(trace_all(t, rays, closest_only));
+            for (TracedAccel& t : traced) {
+                trace_all(t, rays, closest_only);
+                summaries.push_back(summarize(t, rays.size(), closest_only));
+            }
             std::vector<std::vector<double>> mrays(accels.size());  // per structure and round
             for (int round = 0; round < rounds; ++round)
                 for (std::size_t a = 0; a < accels.size(); ++a) {
