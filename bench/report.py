@@ -204,8 +204,7 @@ def section_method(runs):
 - `rebraid bench` builds every structure of one scene in one process and traces the same rays
   through each: primary rays of the auto-framed camera (one per pixel of a 16:9 image) and as
   many diffuse bounce rays from their hit points (cosine-distributed, fixed seed). Mrays/s is
-  closest-hit throughput on {thread_text}: the median of the timed runs after one warm-up.
-  All structures of a scene are built first and then timed taking turns (in order, each an
+  closest-hit throughput on {thread_text}: the median of the timed runs. All structures of a scene are built first and then timed taking turns (in order, each an
   untimed pass and a timed one, as often as the runs), so that a drift in the machine's speed
   during the process slows each alike, while each timed pass finds its structure in the
   caches, as one timed alone does (results collected before this timed one structure after
