@@ -141,6 +141,7 @@ void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
     // A top level of one item: no top-level traversal to run (TraceKernels::sole_item_*).
     const bool is_sole_item = top_.root.is_leaf() && top_.root.prim_count() == 1;
     if (is_sole_item) {
+        refresh_sole_item();
         intersect_ = kernels.sole_item_intersect;
         occluded_ = kernels.sole_item_occluded;
         intersect_located_ = kernels.sole_item_intersect_located;
@@ -153,6 +154,17 @@ void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
         occluded_ = kernels.instanced_occluded;
         intersect_located_ = kernels.instanced_intersect_located;
     }
+}
+
+void InstancedAccel::refresh_sole_item() {
+    if (!top_.root.is_leaf() || top_.root.prim_count() != 1) return;
+    const TopLevelItem& item = top_.items[top_.root.first_prim()];
+    const InstanceTarget& target = instance_targets_[item.instance_id];
+    sole_item_.target = target;
+    sole_item_.bvh = object_views_[target.mesh];
+    sole_item_.node = item.object_node;
+    sole_item_.instance = item.instance_id;
+    sole_item_.may_be_part_leaf = top_.has_partial_leaves;
 }
 
 void InstancedAccel::set_simd_level(SimdLevel level) {
@@ -170,6 +182,7 @@ void InstancedAccel::set_world_to_object(std::span<const AffineTransform> world_
     for (std::size_t i = 0; i < instance_targets_.size(); ++i)
         if (instance_targets_[i].space != InstanceTarget::kWorldSpace)
             instance_targets_[i].to_object = world_to_object[i];
+    refresh_sole_item();
 }
 
 void InstancedAccel::set_triangle_test(TriangleTest test) {

@@ -15,6 +15,7 @@
 #include "rebraid/top_level/instance_target.h"
 #include "rebraid/top_level/located_hit.h"
 #include "rebraid/top_level/merged_top_level.h"
+#include "rebraid/top_level/sole_item.h"
 #include "rebraid/top_level/top_level_bvh.h"
 #include "rebraid/top_level/trace_kernels.h"
 #include "rebraid/top_level/two_level_builder.h"
@@ -69,6 +70,9 @@ public:
     const std::vector<InstanceTarget>& instance_targets() const { return instance_targets_; }
     /// The arrays traversal reads of each mesh's object BVH (index = MeshId).
     const std::vector<ObjectBvhView>& object_views() const { return object_views_; }
+    /// The top level's one item, where it holds only one (the sole-item queries read it); not
+    /// meaningful otherwise.
+    const SoleItem& sole_item() const { return sole_item_; }
     /// The top level with its world-space items' object nodes copied in, which queries
     /// traverse instead of the top level when it is not empty (merged_top_level.h).
     const MergedTopLevel& merged_top_level() const { return merged_; }
@@ -110,8 +114,12 @@ private:
     decltype(TraceKernels::instanced_intersect) intersect_ = nullptr;
     decltype(TraceKernels::instanced_occluded) occluded_ = nullptr;
     decltype(TraceKernels::instanced_intersect_located) intersect_located_ = nullptr;
+    SoleItem sole_item_;
 
     void use_kernels(SimdLevel level, TriangleTest test);
+    /// Copies the top level's one item, its instance's target and its mesh's arrays into
+    /// sole_item_ (when the top level holds one item).
+    void refresh_sole_item();
 };
 
 /// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).

@@ -161,24 +161,21 @@ inline auto closer_hit_notifier(const CloserHitObserver* observer, InstanceId in
 /// maps it. No top-level traversal, and no world-space ray unless the instance is placed by
 /// the identity, whose space is the world's: the query costs what a flat BVH's does, plus
 /// the mapping. The same hits, since the top level's root is then a leaf, whose box no
-/// traversal tests.
+/// traversal tests. Everything it reads of the structure is in one record (SoleItem).
 struct SoleItemStart {
-    const TopLevelItem& item;
-    ObjectBvhView bvh;
+    const SoleItem& item;
     StartLeaf start_leaf;
     std::optional<PreparedRay> ray;
 
     SoleItemStart(const InstancedAccel& accel, const Ray& world_ray)
-        : item(accel.top_level().items[accel.top_level().root.first_prim()]),
-          start_leaf(start_leaf_of(accel.top_level())) {
-        const InstanceTarget& target = accel.instance_targets()[item.instance_id];
-        bvh = accel.object_views()[target.mesh];
-        if (target.space == InstanceTarget::kWorldSpace) {
+        : item(accel.sole_item()),
+          start_leaf(item.may_be_part_leaf ? StartLeaf::may_be_part : StartLeaf::whole) {
+        if (item.target.space == InstanceTarget::kWorldSpace) {
             ray.emplace(world_ray.org, world_ray.dir, world_ray.tnear, world_ray.tfar);
             return;
         }
         Vec3f org, dir;
-        map_into_object_space(target.to_object, world_ray.org, world_ray.dir, org, dir);
+        map_into_object_space(item.target.to_object, world_ray.org, world_ray.dir, org, dir);
         ray.emplace(org, dir, world_ray.tnear, world_ray.tfar);
     }
 };
@@ -191,17 +188,17 @@ Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, Traversal
     SoleItemStart start(accel, ray);
     if (counters) ++counters->object_entries;
     Hit hit;
-    if (intersect_object_bvh<kTest>(start.bvh, start.item.object_node, *start.ray, hit, counters,
-                                    located, closer_hit_notifier(observer, start.item.instance_id),
+    if (intersect_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, hit, counters,
+                                    located, closer_hit_notifier(observer, start.item.instance),
                                     start.start_leaf))
-        hit.instance_id = start.item.instance_id;
+        hit.instance_id = start.item.instance;
     return hit;
 }
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
     SoleItemStart start(accel, ray);
-    return occluded_object_bvh<kTest>(start.bvh, start.item.object_node, *start.ray, nullptr,
+    return occluded_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, nullptr,
                                       start.start_leaf);
 }
 
