@@ -291,63 +291,49 @@ void run_bench(const BenchOptions& options) {
             return scene_step + ", " + variants[v].label + " (" + std::to_string(v + 1) + "/" +
                    std::to_string(variants.size()) + "): ";
         };
-        std::vector<BenchResult> results;
-        for (const AccelVariant& variant : variants)
-            results.push_back(BenchResult{scene_name, &variant, {}, {}, {}, {}});
-        const auto report = [&](const BenchResult& result) {
-            if (options.is_json)
-                all_results.push_back(result_to_json(result, rays, options));
-            else
-                print_result_row(result, name_width);
+        // Builds the variants [first, end), times them taking turns, counts their work, reports
+        // them and frees them: all at once, or each alone (--one-at-a-time).
+        const auto measure = [&](std::size_t first, std::size_t end) {
+            std::vector<BenchResult> results;
+            std::vector<std::unique_ptr<Accel>> accels;
+            std::vector<const Accel*> timed;
+            for (std::size_t v = first; v < end; ++v) {
+                status.show(step_of(v) + "building");
+                accels.push_back(variants[v].entry->build(scene, variants[v].options));
+                results.push_back(
+                    BenchResult{scene_name, &variants[v], accels.back()->stats(), {}, {}, {}});
+                timed.push_back(accels.back().get());
+            }
+            const std::string timing_step =
+                end - first == 1 ? step_of(first) : scene_step + ", the structures taking turns: ";
+            status.show(timing_step + "timing primary rays");
+            const std::vector<TraceTiming> primary =
+                time_closest_hits(timed, rays.primary, options.repetitions);
+            status.show(timing_step + "timing diffuse rays");
+            const std::vector<TraceTiming> diffuse =
+                time_closest_hits(timed, rays.diffuse, options.repetitions);
+            for (std::size_t i = 0; i < results.size(); ++i) {
+                results[i].primary = primary[i];
+                results[i].diffuse = diffuse[i];
+                if (options.is_json) {
+                    status.show(step_of(first + i) + "counting work per ray");
+                    results[i].diffuse_work = count_closest_hit_work(*accels[i], rays.diffuse);
+                }
+            }
+            accels.clear();  // freed before any other structure is built
+            status.clear();
+            for (const BenchResult& result : results) {
+                if (options.is_json)
+                    all_results.push_back(result_to_json(result, rays, options));
+                else
+                    print_result_row(result, name_width);
+            }
         };
         if (options.one_at_a_time) {
-            for (std::size_t v = 0; v < variants.size(); ++v) {
-                BenchResult& result = results[v];
-                {
-                    status.show(step_of(v) + "building");
-                    const std::unique_ptr<Accel> accel =
-                        variants[v].entry->build(scene, variants[v].options);
-                    result.stats = accel->stats();
-                    const std::vector<const Accel*> alone = {accel.get()};
-                    status.show(step_of(v) + "timing primary rays");
-                    result.primary = time_closest_hits(alone, rays.primary, options.repetitions)[0];
-                    status.show(step_of(v) + "timing diffuse rays");
-                    result.diffuse = time_closest_hits(alone, rays.diffuse, options.repetitions)[0];
-                    if (options.is_json) {
-                        status.show(step_of(v) + "counting work per ray");
-                        result.diffuse_work = count_closest_hit_work(*accel, rays.diffuse);
-                    }
-                }  // freed before the next structure is built
-                status.clear();
-                report(result);
-            }
-            continue;
+            for (std::size_t v = 0; v < variants.size(); ++v) measure(v, v + 1);
+        } else {
+            measure(0, variants.size());
         }
-        std::vector<std::unique_ptr<Accel>> accels;
-        std::vector<const Accel*> timed;
-        for (std::size_t v = 0; v < variants.size(); ++v) {
-            status.show(step_of(v) + "building");
-            accels.push_back(variants[v].entry->build(scene, variants[v].options));
-            results[v].stats = accels.back()->stats();
-            timed.push_back(accels.back().get());
-        }
-        status.show(scene_step + ": timing primary rays, the structures taking turns");
-        const std::vector<TraceTiming> primary =
-            time_closest_hits(timed, rays.primary, options.repetitions);
-        status.show(scene_step + ": timing diffuse rays, the structures taking turns");
-        const std::vector<TraceTiming> diffuse =
-            time_closest_hits(timed, rays.diffuse, options.repetitions);
-        for (std::size_t v = 0; v < variants.size(); ++v) {
-            results[v].primary = primary[v];
-            results[v].diffuse = diffuse[v];
-            if (options.is_json) {
-                status.show(step_of(v) + "counting work per ray");
-                results[v].diffuse_work = count_closest_hit_work(*accels[v], rays.diffuse);
-            }
-        }
-        accels.clear();
-        status.clear();
-        for (const BenchResult& result : results) report(result);
     }
     if (options.is_json) std::cout << all_results.dump(2) << "\n";
 }

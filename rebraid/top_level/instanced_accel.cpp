@@ -139,8 +139,7 @@ bool InstancedAccel::occluded(const Ray& ray) const {
 void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
     const TraceKernels& kernels = trace_kernels(level, test);
     // A top level of one item: no top-level traversal to run (TraceKernels::sole_item_*).
-    const bool is_sole_item = top_.root.is_leaf() && top_.root.prim_count() == 1;
-    if (is_sole_item) {
+    if (has_sole_item()) {
         refresh_sole_item();
         intersect_ = kernels.sole_item_intersect;
         occluded_ = kernels.sole_item_occluded;
@@ -156,15 +155,18 @@ void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
     }
 }
 
+bool InstancedAccel::has_sole_item() const {
+    return top_.root.is_leaf() && top_.root.prim_count() == 1;
+}
+
 void InstancedAccel::refresh_sole_item() {
-    if (!top_.root.is_leaf() || top_.root.prim_count() != 1) return;
+    if (!has_sole_item()) return;
     const TopLevelItem& item = top_.items[top_.root.first_prim()];
     const InstanceTarget& target = instance_targets_[item.instance_id];
     sole_item_.target = target;
     sole_item_.bvh = object_views_[target.mesh];
     sole_item_.node = item.object_node;
     sole_item_.instance = item.instance_id;
-    sole_item_.may_be_part_leaf = top_.has_partial_leaves;
 }
 
 void InstancedAccel::set_simd_level(SimdLevel level) {

@@ -117,6 +117,8 @@ private:
     SoleItem sole_item_;
 
     void use_kernels(SimdLevel level, TriangleTest test);
+    /// Whether the top level holds one item (its root a leaf of one item).
+    bool has_sole_item() const;
     /// Copies the top level's one item, its instance's target and its mesh's arrays into
     /// sole_item_ (when the top level holds one item).
     void refresh_sole_item();

@@ -21,8 +21,6 @@ struct SoleItem {
     /// The item's object node, where queries start.
     NodeRef node;
     InstanceId instance = 0;
-    /// Whether a leaf `node` may be part of a leaf (TopLevelBvh::has_partial_leaves).
-    bool may_be_part_leaf = false;
 };
 
 }  // namespace rebraid

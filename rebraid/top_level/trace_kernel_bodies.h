@@ -168,8 +168,7 @@ struct SoleItemStart {
     std::optional<PreparedRay> ray;
 
     SoleItemStart(const InstancedAccel& accel, const Ray& world_ray)
-        : item(accel.sole_item()),
-          start_leaf(item.may_be_part_leaf ? StartLeaf::may_be_part : StartLeaf::whole) {
+        : item(accel.sole_item()), start_leaf(start_leaf_of(accel.top_level())) {
         if (item.target.space == InstanceTarget::kWorldSpace) {
             ray.emplace(world_ray.org, world_ray.dir, world_ray.tnear, world_ray.tfar);
             return;
