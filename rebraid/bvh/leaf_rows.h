@@ -25,6 +25,23 @@ inline const float* leaf_rows_at(const float* rows, std::uint32_t first) {
     return rows + std::size_t(kRowFloatsPerTriangle) * first;
 }
 
+/// Leaf rows of at least this many bytes in a structure (all its object BVHs together) are
+/// asked for ahead by the closest-hit traversal (LeafRowsPrefetch, leaf_row_hints.h); fewer
+/// are left to the caches, which hold them anyway, so that asking costs more than it hides.
+/// Without the requests the flat BVH traced chinese_dragon's primary rays 1.023x as fast, the
+/// re-braided structures of brainstem, cg57_cruiser, the default scene and the generated
+/// trees and city (all under 5 MB) 1.00-1.014x; with them the flat BVH traced the default
+/// scene's diffuse rays (59 MB of rows) 1.09x and the generated powerplant's 1.06x as fast
+/// (bench/tools/kernel_ab.py on an AMD EPYC of family 25, 32 MB of L3; docs/design.md,
+/// "Leaves").
+inline constexpr std::uint64_t kLeafRowPrefetchMinBytes = std::uint64_t(16) << 20;
+
+/// Whether a structure whose object BVHs hold `row_floats` floats of leaf rows in all asks
+/// for them ahead (kLeafRowPrefetchMinBytes).
+inline bool prefetches_leaf_rows(std::uint64_t row_floats) {
+    return row_floats * sizeof(float) >= kLeafRowPrefetchMinBytes;
+}
+
 /// The corners of every leaf's triangles stored pre-arranged for the SIMD group test: the
 /// leaf at leaf-order positions [p, p + n) holds 10 rows of n floats at floats [10p, 10p + 10n)
 /// (after the leading padding), row 3c + a holding axis a of corner c of the leaf's

@@ -51,13 +51,17 @@ struct ObjectBvhView {
     const TriangleVerts* triangles = nullptr;  ///< leaf order
     const PrimId* prim_ids = nullptr;          ///< leaf order -> triangle index in the mesh
     const float* leaf_rows = nullptr;          ///< ObjectBvh::leaf_rows past its padding
+    /// Whether closest-hit queries ask for leaf rows ahead (prefetches_leaf_rows): by this
+    /// BVH's rows alone, unless the structure holding the view decides for all its BVHs.
+    bool prefetches_rows = false;
 
     ObjectBvhView() = default;
     ObjectBvhView(const ObjectBvh& bvh)  // NOLINT: a view converts implicitly, as a span does
         : nodes(bvh.nodes.data()),
           triangles(bvh.triangles.data()),
           prim_ids(bvh.prim_ids.data()),
-          leaf_rows(bvh.leaf_rows.empty() ? nullptr : bvh.leaf_rows.data() + kLeafRowPadding) {}
+          leaf_rows(bvh.leaf_rows.empty() ? nullptr : bvh.leaf_rows.data() + kLeafRowPadding),
+          prefetches_rows(prefetches_leaf_rows(bvh.leaf_rows.size())) {}
 };
 
 }  // namespace rebraid

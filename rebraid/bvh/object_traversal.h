@@ -130,9 +130,10 @@ namespace object_traversal_detail {
 
 /// intersect_object_bvh_leaf_order with `lanes` gathering the leaves' triangles.
 template <TriangleTest kTest, class Lanes, class HitDataPrefetch>
-bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
+bool intersect_with_lanes(Lanes& lanes, ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                           Hit& hit, TraversalCounters* counters,
                           HitDataPrefetch&& prefetch_hit_data, MollerTerms* terms) {
+    const WideNode* nodes = bvh.nodes;
     TraversalRay& ray = prepared.ray;
     const TriangleGroupRay& group_ray = prepared.triangle_ray;
     bool found = false;
@@ -158,7 +159,8 @@ bool intersect_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pr
     };
     if constexpr (requires { lanes.rows(); })
         traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
-            nodes, start, prepared, counters, visit_leaves, LeafRowsPrefetch{lanes.rows()});
+            nodes, start, prepared, counters, visit_leaves,
+            LeafRowsPrefetch{lanes.rows(), bvh.prefetches_rows});
     else
         traverse_bvh<TraversalOrder::nearest_first, LeafVisits::with_siblings>(
             nodes, start, prepared, counters, visit_leaves);
@@ -210,12 +212,12 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 #ifdef REBRAID_SIMD_AVX2
     if (rows_serve(bvh, start, start_leaf)) {
         LeafRowLanes lanes(bvh.leaf_rows);
-        return intersect_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, hit, counters,
+        return intersect_with_lanes<kTest>(lanes, bvh, start, prepared, hit, counters,
                                            prefetch_hit_data, terms);
     }
 #endif
     LeafTriangleLanes lanes(bvh.triangles);
-    return intersect_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, hit, counters,
+    return intersect_with_lanes<kTest>(lanes, bvh, start, prepared, hit, counters,
                                        prefetch_hit_data, terms);
 }
 

@@ -86,6 +86,12 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
             throw Error("InstancedAccel: instance of mesh " + std::to_string(instance.mesh_id) +
                         " with " + std::to_string(object_bvhs_.size()) + " object BVHs");
     object_views_.assign(object_bvhs_.begin(), object_bvhs_.end());
+    // Whether rows are asked for ahead is the structure's choice: what the caches hold is all
+    // its object BVHs' rows, not one's.
+    std::uint64_t row_floats = 0;
+    for (const ObjectBvh& bvh : object_bvhs_) row_floats += bvh.leaf_rows.size();
+    for (ObjectBvhView& view : object_views_)
+        view.prefetches_rows = prefetches_leaf_rows(row_floats);
     // On huge pages when large: fewer first-touch faults, and rays reach the records of
     // instances all over the scene.
     reserve_on_huge_pages(instance_mesh_, count);

@@ -218,5 +218,30 @@ TEST(LeafRows, KernelsAnswerTheSameWithAndWithoutThem) {
     expect_same_with_and_without_rows(a, b, rays);
 }
 
+TEST(LeafRows, AskedForAheadOnlyWhereTheStructuresRowsOutgrowTheCaches) {
+    const Scene scene = make_default_scene();
+    // The flat BVH's rows (1.5 M triangles) are far beyond kLeafRowPrefetchMinBytes; the
+    // re-braided structure's six object BVHs together are not.
+    const FlatAccel flat(scene);
+    EXPECT_TRUE(ObjectBvhView(flat.bvh()).prefetches_rows);
+    const InstancedAccel rebraided = build_rebraid_accel(scene);
+    for (const ObjectBvhView& view : rebraided.object_views()) EXPECT_FALSE(view.prefetches_rows);
+    // One mesh per instance: no object BVH alone reaches the threshold, all of them together
+    // do, and the structure decides for all.
+    Scene copies;
+    for (const Instance& instance : scene.instances) {
+        copies.meshes.push_back(scene.meshes[instance.mesh_id]);
+        copies.instances.push_back({MeshId(copies.meshes.size() - 1), instance.object_to_world});
+    }
+    const InstancedAccel two_level = build_two_level_accel(copies);
+    std::uint64_t row_floats = 0;
+    for (const ObjectBvh& bvh : two_level.object_bvhs()) {
+        EXPECT_FALSE(ObjectBvhView(bvh).prefetches_rows);
+        row_floats += bvh.leaf_rows.size();
+    }
+    EXPECT_GE(row_floats * sizeof(float), kLeafRowPrefetchMinBytes);
+    for (const ObjectBvhView& view : two_level.object_views()) EXPECT_TRUE(view.prefetches_rows);
+}
+
 }  // namespace
 }  // namespace rebraid
