@@ -35,11 +35,8 @@ void write_leaf_row_hints(std::vector<WideNode>& nodes);
 /// test. Stacked children are not asked for (measured: less gain on the default scene).
 struct LeafRowsPrefetch {
     const float* rows;
-    /// False for structures whose rows the caches hold (prefetches_leaf_rows).
-    bool is_on;
     void operator()(NodeRef) const {}
     void rows_of_child(NodeRef, std::uint32_t hint) const {
-        if (!is_on) return;
         const std::uint32_t lines = hint >> kLeafRowHintLineShift;
         // Computed as an integer, so that no pointer past the rows is ever formed; a prefetch
         // never faults.
