@@ -91,8 +91,9 @@ private:
 /// Adds the triangles of the leaves bit i of `slots` selects in `refs` to `lanes`
 /// (LeafTriangleLanes or LeafRowLanes), counting them in `counters` when given, calling
 /// `test()` whenever the lanes fill and once at the end for the rest; stops adding leaves
-/// once `is_done()` (any-hit queries: a hit was found). Both object-BVH queries visit sibling
-/// leaves this way (LeafVisits::with_siblings).
+/// once `is_done()` (any-hit queries: a hit was found). The merged top level's object leaves
+/// are tested so: there, testing each alone (test_each_leaf) traced brainstem's re-braided
+/// structure 4 % slower.
 template <class Lanes, class Test, class IsDone>
 void add_leaves_and_test(Lanes& lanes, const NodeRef* refs, unsigned slots,
                          TraversalCounters* counters, Test&& test, IsDone&& is_done) {
@@ -103,6 +104,24 @@ void add_leaves_and_test(Lanes& lanes, const NodeRef* refs, unsigned slots,
         lanes.add(leaf, test);
     } while (slots && !is_done());
     test();
+}
+
+/// Tests the leaves bit i of `slots` selects in `refs`, each on its own in slot order, through
+/// `lanes` (LeafTriangleLanes or LeafRowLanes), counting their triangles in `counters` when
+/// given; `test()` tests what the lanes hold and clears them. Stops once `is_done()` (any-hit
+/// queries: a hit was found). The object BVH queries test leaves so: gathering sibling leaves
+/// into shared tests (add_leaves_and_test) traced the flat BVH 2-8 % slower (docs/design.md,
+/// "Leaves"), the gathering's bookkeeping on the path every test waits on.
+template <class Lanes, class Test, class IsDone>
+void test_each_leaf(Lanes& lanes, const NodeRef* refs, unsigned slots, TraversalCounters* counters,
+                    Test&& test, IsDone&& is_done) {
+    do {
+        const NodeRef leaf = refs[std::countr_zero(slots)];
+        slots &= slots - 1;
+        if (counters) counters->triangles_tested += leaf.prim_count();
+        lanes.add(leaf, test);
+        test();
+    } while (slots && !is_done());
 }
 
 /// Whether this kernel's closest-hit queries with the test `kTest` give a hit's Möller terms
@@ -152,9 +171,9 @@ bool intersect_with_lanes(Lanes& lanes, ObjectBvhView bvh, NodeRef start, Prepar
         }
         lanes.clear();
     };
-    // Sibling leaves together (LeafVisits::with_siblings): their triangles share tests.
+    // Sibling leaves before the node's inner children (LeafVisits::with_siblings).
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
-        add_leaves_and_test(lanes, refs, slots, counters, test_lanes, [] { return false; });
+        test_each_leaf(lanes, refs, slots, counters, test_lanes, [] { return false; });
         return false;
     };
     // Two traversals, with and without asking for rows ahead, rather than one testing a flag
@@ -185,7 +204,7 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
         lanes.clear();
     };
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
-        add_leaves_and_test(lanes, refs, slots, counters, test_lanes, [&] { return is_occluded; });
+        test_each_leaf(lanes, refs, slots, counters, test_lanes, [&] { return is_occluded; });
         return is_occluded;
     };
     // Any order: the first hit ends the query, and sorting the children costs more than the
