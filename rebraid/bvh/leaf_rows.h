@@ -30,7 +30,7 @@ inline const float* leaf_rows_at(const float* rows, std::uint32_t first) {
 /// are left to the caches, which hold them anyway, so that asking costs more than it hides.
 /// Without the requests the flat BVH traced chinese_dragon's primary rays 1.023x as fast, the
 /// re-braided structures of brainstem, cg57_cruiser, the default scene and the generated
-/// trees and city (all under 5 MB) 1.00-1.014x; with them the flat BVH traced the default
+/// trees and city (up to 7.2 MB of rows) 1.00-1.014x; with them the flat BVH traced the default
 /// scene's diffuse rays (59 MB of rows) 1.09x and the generated powerplant's 1.06x as fast
 /// (bench/tools/kernel_ab.py on an AMD EPYC of family 25, 32 MB of L3; docs/design.md,
 /// "Leaves").
