@@ -12,10 +12,11 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 
 #ifdef REBRAID_SIMD_AVX2
 
-/// The triangles of several leaves gathered into the lanes of one group test from their
-/// pre-arranged rows (leaf_rows.h): each leaf's row lands in its lanes with one unaligned
-/// load shifted by its first lane and a blend, where the corner storage needs a transpose
-/// per triangle.
+/// The triangles of leaves in the lanes of one group test from their pre-arranged rows
+/// (leaf_rows.h): each leaf's row lands in its lanes with one unaligned load (shifted by its
+/// first lane and blended in where sibling leaves share a test, as in the merged top level;
+/// the object BVH queries test one leaf at a time), where the corner storage needs a
+/// transpose per triangle.
 class LeafRowLanes {
 public:
     explicit LeafRowLanes(const float* rows) : rows_(rows) {}

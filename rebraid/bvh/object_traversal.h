@@ -39,8 +39,10 @@ struct NoHitDataPrefetch {
     void operator()(std::uint32_t, Corners&&, std::optional<PrimId>) const {}
 };
 
-/// The triangles of several leaves (leaf-order ranges of one BVH) gathered into lanes of
-/// group tests, 8 at a time: sibling leaves of 1-2 triangles share one SIMD test.
+/// The triangles of leaves (leaf-order ranges of one BVH) in the lanes of group tests, 8 at a
+/// time, from the corner storage: one leaf per test in the object BVH queries
+/// (test_each_leaf), sibling leaves sharing tests in the merged top level's
+/// (add_leaves_and_test).
 class LeafTriangleLanes {
 public:
     explicit LeafTriangleLanes(const TriangleVerts* triangles) : triangles_(triangles) {}
@@ -147,7 +149,7 @@ std::optional<PrimId> row_prim_id([[maybe_unused]] const Lanes& lanes,
 
 namespace object_traversal_detail {
 
-/// intersect_object_bvh_leaf_order with `lanes` gathering the leaves' triangles.
+/// intersect_object_bvh_leaf_order with `lanes` holding the leaves' triangles.
 template <TriangleTest kTest, class Lanes, class HitDataPrefetch>
 bool intersect_with_lanes(Lanes& lanes, ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
                           Hit& hit, TraversalCounters* counters,
@@ -192,7 +194,7 @@ bool intersect_with_lanes(Lanes& lanes, ObjectBvhView bvh, NodeRef start, Prepar
     return found;
 }
 
-/// occluded_object_bvh with `lanes` gathering the leaves' triangles.
+/// occluded_object_bvh with `lanes` holding the leaves' triangles.
 template <TriangleTest kTest, class Lanes>
 bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                          TraversalCounters* counters) {
