@@ -8,6 +8,7 @@
 #include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/bvh/leaf_row_lanes.h"
 #include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/single_leaf_rows.h"
 #include "rebraid/bvh/traversal.h"
 #include "rebraid/bvh/triangle_group.h"
 #include "rebraid/core/simd_config.h"
@@ -64,6 +65,12 @@ public:
         }
     }
     std::uint32_t count() const { return count_; }
+    /// Calls `test()` for the leaf's triangles alone (the lanes are empty), 8 at a time.
+    template <class Test>
+    void test_leaf(NodeRef leaf, Test&& test) {
+        add(leaf, test);
+        test();
+    }
     /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any, by
     /// the test `kTest` (and its terms in `terms`, when given: intersect_triangle_lanes).
     template <TriangleTest kTest>
@@ -109,7 +116,7 @@ void add_leaves_and_test(Lanes& lanes, const NodeRef* refs, unsigned slots,
 }
 
 /// Tests the leaves bit i of `slots` selects in `refs`, each on its own in slot order, through
-/// `lanes` (LeafTriangleLanes or LeafRowLanes), counting their triangles in `counters` when
+/// `lanes` (LeafTriangleLanes or SingleLeafRows), counting their triangles in `counters` when
 /// given; `test()` tests what the lanes hold and clears them. Stops once `is_done()` (any-hit
 /// queries: a hit was found). The object BVH queries test leaves so: gathering sibling leaves
 /// into shared tests (add_leaves_and_test) traced the flat BVH 2-8 % slower (docs/design.md,
@@ -121,8 +128,7 @@ void test_each_leaf(Lanes& lanes, const NodeRef* refs, unsigned slots, Traversal
         const NodeRef leaf = refs[std::countr_zero(slots)];
         slots &= slots - 1;
         if (counters) counters->triangles_tested += leaf.prim_count();
-        lanes.add(leaf, test);
-        test();
+        lanes.test_leaf(leaf, test);
     } while (slots && !is_done());
 }
 
@@ -238,7 +244,7 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
     using namespace object_traversal_detail;
 #ifdef REBRAID_SIMD_AVX2
     if (rows_serve(bvh, start, start_leaf)) {
-        LeafRowLanes lanes(bvh.leaf_rows);
+        SingleLeafRows lanes(bvh.leaf_rows);
         return intersect_with_lanes<kTest>(lanes, bvh, start, prepared, hit, counters,
                                            prefetch_hit_data, terms);
     }
@@ -294,7 +300,7 @@ bool occluded_object_bvh(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared
     using namespace object_traversal_detail;
 #ifdef REBRAID_SIMD_AVX2
     if (rows_serve(bvh, start, start_leaf)) {
-        LeafRowLanes lanes(bvh.leaf_rows);
+        SingleLeafRows lanes(bvh.leaf_rows);
         return occluded_with_lanes<kTest>(lanes, bvh.nodes, start, prepared, counters);
     }
 #endif
