@@ -174,17 +174,22 @@ struct GroupTest<TriangleTest::moller> {
 
     GroupTest(const GroupCorners& corners, std::uint32_t count, const TriangleGroupRay& ray,
               float tnear, float tfar) {
-        const Vec3x8 e1 = corners.corner[0] - corners.corner[1];
-        const Vec3x8 e2 = corners.corner[2] - corners.corner[0];
-        normal = cross(e2, e1);
+        // In an order that ends each value's use early (r before the edges, each edge's
+        // weight right after it): with the edges, r, c and the normal all live at once the
+        // test spilled at AVX2's 16 registers.
         const Vec3x8 c = corners.corner[0] - Vec3x8{ray.org[0], ray.org[1], ray.org[2]};
         const Vec3x8 r = cross(c, Vec3x8{ray.dir[0], ray.dir[1], ray.dir[2]});
+        const Vec3x8 e2 = corners.corner[2] - corners.corner[0];
+        const __m256 r_dot_e2 = dot(r, e2);
+        const Vec3x8 e1 = corners.corner[0] - corners.corner[1];
+        const __m256 r_dot_e1 = dot(r, e1);
+        normal = cross(e2, e1);
         const __m256 den = dot(normal, ray.dir);
         const __m256 sign_bit = _mm256_set1_ps(-0.0f);
         const __m256 den_sign = _mm256_and_ps(den, sign_bit);
         sum = _mm256_andnot_ps(sign_bit, den);  // |den|
-        w1 = _mm256_xor_ps(dot(r, e2), den_sign);
-        w2 = _mm256_xor_ps(dot(r, e1), den_sign);
+        w1 = _mm256_xor_ps(r_dot_e2, den_sign);
+        w2 = _mm256_xor_ps(r_dot_e1, den_sign);
         const __m256 zero = _mm256_setzero_ps();
         const __m256 inside = _mm256_and_ps(
             _mm256_and_ps(_mm256_cmp_ps(w1, zero, _CMP_GE_OQ), _mm256_cmp_ps(w2, zero, _CMP_GE_OQ)),
