@@ -52,6 +52,19 @@ inline constexpr SlabPlaneOffsets kSlabPlaneOffsets[8] = {
     make_slab_plane_offsets(3), make_slab_plane_offsets(4), make_slab_plane_offsets(5),
     make_slab_plane_offsets(6), make_slab_plane_offsets(7)};
 
+#ifdef REBRAID_SIMD_AVX2
+/// 1 / direction per axis in lanes 0-2 (lane 3: 1), a component closer to zero than 1e-18
+/// taken as 1e-18 of its sign, so that every reciprocal is finite.
+inline __m128 reciprocal_directions(Vec3f direction) {
+    const __m128 d = _mm_setr_ps(direction.x, direction.y, direction.z, 1.0f);
+    const __m128 sign_bit = _mm_set1_ps(-0.0f);
+    const __m128 tiny = _mm_set1_ps(1e-18f);
+    const __m128 is_tiny = _mm_cmplt_ps(_mm_andnot_ps(sign_bit, d), tiny);
+    const __m128 safe = _mm_blendv_ps(d, _mm_or_ps(_mm_and_ps(d, sign_bit), tiny), is_tiny);
+    return _mm_div_ps(_mm_set1_ps(1.0f), safe);
+}
+#endif
+
 /// A ray prepared for box tests: reciprocal direction with zero components replaced by tiny
 /// ones (so no 0 * inf appears) and the sign of each axis, from which a box test takes the
 /// plane arrays the ray enters and leaves a box through (slab_plane_offset).
@@ -72,12 +85,7 @@ struct TraversalRay {
         // instance's space pays this set-up, and the scalar form (a branch and a division per
         // axis) cost as many instructions as a rejected ray's whole traversal. Same IEEE
         // operations per lane, so the same reciprocals.
-        const __m128 d = _mm_setr_ps(direction.x, direction.y, direction.z, 1.0f);
-        const __m128 sign_bit = _mm_set1_ps(-0.0f);
-        const __m128 tiny = _mm_set1_ps(1e-18f);
-        const __m128 is_tiny = _mm_cmplt_ps(_mm_andnot_ps(sign_bit, d), tiny);
-        const __m128 safe = _mm_blendv_ps(d, _mm_or_ps(_mm_and_ps(d, sign_bit), tiny), is_tiny);
-        const __m128 reciprocal = _mm_div_ps(_mm_set1_ps(1.0f), safe);
+        const __m128 reciprocal = reciprocal_directions(direction);
         alignas(16) float lanes[4];
         _mm_store_ps(lanes, reciprocal);
         rdir = {lanes[0], lanes[1], lanes[2]};

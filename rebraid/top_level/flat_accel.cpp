@@ -79,6 +79,7 @@ FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings)
     bvh_ = build_object_bvh(world, settings);
     renumber_in_leaf_order(bvh_, triangle_instance_, triangle_prim_);
     write_hit_ids(scene);
+    root_box_ = root_box_of(bvh_.nodes, bvh_.root);
     build_info_.build_ms = timer.elapsed_ms();
     build_info_.triangles = scene.instanced_triangle_count();
     build_info_.instances = scene.instances.size();

@@ -4,6 +4,7 @@
 
 #include "rebraid/bvh/build_settings.h"
 #include "rebraid/bvh/object_bvh.h"
+#include "rebraid/bvh/root_box.h"
 #include "rebraid/core/accel.h"
 #include "rebraid/core/scene.h"
 #include "rebraid/core/simd_level.h"
@@ -25,6 +26,8 @@ public:
     AccelStats stats() const override;
 
     const ObjectBvh& bvh() const { return bvh_; }
+    /// The box around the BVH's root children, which queries test first (root_box_cull.h).
+    const RootBox& root_box() const { return root_box_; }
     /// Instance and primID of each world triangle (index = the flat BVH's primID).
     const std::vector<InstanceId>& triangle_instances() const { return triangle_instance_; }
     const std::vector<PrimId>& triangle_prims() const { return triangle_prim_; }
@@ -55,6 +58,7 @@ private:
     SimdLevel simd_level_;
     TriangleTest triangle_test_ = TriangleTest::moller;
     const TraceKernels* kernels_;
+    RootBox root_box_;
 };
 
 }  // namespace rebraid

@@ -124,6 +124,8 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
         merged_ = merge_top_level_items(top_, instance_targets_, object_views_, object_to_world_,
                                         object_nodes, merge);
     }
+    root_box_ = merged_.empty() ? root_box_of(top_.nodes, top_.root)
+                                : root_box_of(merged_.nodes, merged_.root);
     use_kernels(simd_level_, triangle_test_);
     const double records_ms = timer.elapsed_ms();
     build_info_.build_ms += records_ms;

@@ -7,6 +7,7 @@
 #include "rebraid/bvh/build_settings.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/object_bvh_builder.h"
+#include "rebraid/bvh/root_box.h"
 #include "rebraid/core/accel.h"
 #include "rebraid/core/scene.h"
 #include "rebraid/core/simd_level.h"
@@ -76,6 +77,9 @@ public:
     /// The top level with its world-space items' object nodes copied in, which queries
     /// traverse instead of the top level when it is not empty (merged_top_level.h).
     const MergedTopLevel& merged_top_level() const { return merged_; }
+    /// The box around the root children of the tree queries traverse (the merged top level
+    /// or the top level), which they test first (root_box_cull.h).
+    const RootBox& root_box() const { return root_box_; }
 
     /// Replaces the world-to-object map of every instance not placed by the identity with
     /// `world_to_object[i]` (index = InstanceId; each an inverse of the instance's
@@ -115,6 +119,7 @@ private:
     decltype(TraceKernels::instanced_occluded) occluded_ = nullptr;
     decltype(TraceKernels::instanced_intersect_located) intersect_located_ = nullptr;
     SoleItem sole_item_;
+    RootBox root_box_;
 
     void use_kernels(SimdLevel level, TriangleTest test);
     /// Whether the top level holds one item (its root a leaf of one item).
