@@ -124,6 +124,7 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
         merged_ = merge_top_level_items(top_, instance_targets_, object_views_, object_to_world_,
                                         object_nodes, merge);
     }
+    // (A top level of one item has no root node of its own: refresh_sole_item() sets the box.)
     root_box_ = merged_.empty() ? root_box_of(top_.nodes, top_.root)
                                 : root_box_of(merged_.nodes, merged_.root);
     use_kernels(simd_level_, triangle_test_);
@@ -175,6 +176,10 @@ void InstancedAccel::refresh_sole_item() {
     sole_item_.bvh = object_views_[target.mesh];
     sole_item_.node = item.object_node;
     sole_item_.instance = item.instance_id;
+    // The item's node is in world space only where its instance is placed by the identity.
+    root_box_ = target.space == InstanceTarget::kWorldSpace
+                    ? root_box_of(object_bvhs_[target.mesh].nodes, item.object_node)
+                    : RootBox{};
 }
 
 void InstancedAccel::set_simd_level(SimdLevel level) {

@@ -77,8 +77,9 @@ public:
     /// The top level with its world-space items' object nodes copied in, which queries
     /// traverse instead of the top level when it is not empty (merged_top_level.h).
     const MergedTopLevel& merged_top_level() const { return merged_; }
-    /// The box around the root children of the tree queries traverse (the merged top level
-    /// or the top level), which they test first (root_box_cull.h).
+    /// The box around the root children of the tree queries traverse (the merged top level,
+    /// the top level, or a sole item's object BVH where its instance is placed by the
+    /// identity), which they test first (root_box_cull.h).
     const RootBox& root_box() const { return root_box_; }
 
     /// Replaces the world-to-object map of every instance not placed by the identity with

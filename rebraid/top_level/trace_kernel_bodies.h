@@ -196,9 +196,15 @@ struct SoleItemStart {
 template <TriangleTest kTest>
 Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                           HitTriangle* located, const CloserHitObserver* observer) {
+    Hit hit;  // one object every return names: built in place for the caller
+    if (misses_root_box(accel.root_box(), ray)) {
+        // Counted as the query it stands in for: the entry, then its root's box test.
+        if (counters) ++counters->object_entries;
+        count_root_visit(counters);
+        return hit;
+    }
     SoleItemStart start(accel, ray);
     if (counters) ++counters->object_entries;
-    Hit hit;
     if (intersect_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, hit, counters,
                                     located, closer_hit_notifier(observer, start.item.instance),
                                     start.start_leaf))
@@ -208,6 +214,7 @@ Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, Traversal
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
+    if (misses_root_box(accel.root_box(), ray)) return false;
     SoleItemStart start(accel, ray);
     return occluded_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, nullptr,
                                       start.start_leaf);
