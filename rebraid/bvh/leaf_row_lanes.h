@@ -12,11 +12,11 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 
 #ifdef REBRAID_SIMD_AVX2
 
-/// The triangles of leaves in the lanes of one group test from their pre-arranged rows
-/// (leaf_rows.h): each leaf's row lands in its lanes with one unaligned load (shifted by its
-/// first lane and blended in where sibling leaves share a test, as in the merged top level;
-/// the object BVH queries test one leaf at a time), where the corner storage needs a
-/// transpose per triangle.
+/// The triangles of sibling leaves in the lanes of shared group tests (the merged top
+/// level's), from their pre-arranged rows (leaf_rows.h): each leaf's row lands in its lanes
+/// with one unaligned load, shifted by its first lane and blended in, where the corner storage
+/// needs a transpose per triangle. The object BVH queries, which test each leaf alone, read
+/// its rows through SingleLeafRows, without these records of which leaf fills which lanes.
 class LeafRowLanes {
 public:
     explicit LeafRowLanes(const float* rows) : rows_(rows) {}
