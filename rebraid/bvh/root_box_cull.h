@@ -20,7 +20,7 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 /// of the root's child boxes, with float max and min: its entry is never later and its exit
 /// never earlier than a child's, so every ray that meets a child within its interval (the
 /// robust test's promise) passes. (NodeBoxTest's integer max and min let in a few rays more
-/// that meet no box, a -0 distance counting as the least: rays the triangle tests cannot hit.)
+/// that meet no box, a -0 distance counting as the least: rays outside it that move away.)
 /// A NaN in the ray answers a miss, as the traversal does. The portable kernels reject
 /// nothing here.
 inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]] const Ray& ray) {
