@@ -1,6 +1,5 @@
 #pragma once
 
-#include <bit>
 #include <cstdint>
 
 #include "rebraid/bvh/leaf_rows.h"
@@ -85,18 +84,12 @@ public:
     /// PrimID of the triangle in `lane`, from its leaf's id row.
     PrimId prim_id(std::uint32_t lane) const {
         const Segment& segment = segment_of(lane);
-        return std::bit_cast<PrimId>(
-            segment.base[std::size_t(kCornerRows) * segment.stride + (lane - segment.lane)]);
+        return leaf_row_prim_id(segment.base + (lane - segment.lane), segment.stride);
     }
     /// Corners of the triangle in `lane`, from its rows.
     TriangleVerts corners(std::uint32_t lane) const {
         const Segment& segment = segment_of(lane);
-        const float* first = segment.base + (lane - segment.lane);
-        TriangleVerts out;
-        static_assert(sizeof(TriangleVerts) == 9 * sizeof(float));
-        float* values = &out.v0.x;
-        for (std::uint32_t r = 0; r < 9; ++r) values[r] = first[std::size_t(r) * segment.stride];
-        return out;
+        return leaf_row_corners(segment.base + (lane - segment.lane), segment.stride);
     }
     void clear() { count_ = segment_count_ = 0; }
 

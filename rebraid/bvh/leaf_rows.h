@@ -1,5 +1,7 @@
 #pragma once
 
+#include <bit>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -23,6 +25,21 @@ inline constexpr std::uint32_t kRowFloatsPerTriangle = kCornerRows + 1;
 /// leading padding); row r of a leaf of n triangles starts n * r floats further.
 inline const float* leaf_rows_at(const float* rows, std::uint32_t first) {
     return rows + std::size_t(kRowFloatsPerTriangle) * first;
+}
+
+/// The corners of the triangle whose rows start at `first` (leaf_rows_at of its leaf plus its
+/// place in the leaf; each row `stride` floats, the leaf's triangle count), read back.
+inline TriangleVerts leaf_row_corners(const float* first, std::uint32_t stride) {
+    static_assert(sizeof(TriangleVerts) == kCornerRows * sizeof(float));
+    TriangleVerts out;
+    float* values = &out.v0.x;
+    for (std::uint32_t r = 0; r < kCornerRows; ++r) values[r] = first[std::size_t(r) * stride];
+    return out;
+}
+
+/// The primID of that triangle, from its leaf's id row.
+inline PrimId leaf_row_prim_id(const float* first, std::uint32_t stride) {
+    return std::bit_cast<PrimId>(first[std::size_t(kCornerRows) * stride]);
 }
 
 /// Leaf rows of at least this many bytes in a structure (all its object BVHs together) are

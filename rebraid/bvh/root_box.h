@@ -10,7 +10,7 @@ namespace rebraid {
 /// The box around every child of a BVH's root node, kept beside a structure so that a query
 /// can reject a ray that misses it before preparing anything for the traversal
 /// (root_box_cull.h). Where the root is a leaf there is no such node test to stand in for:
-/// the box is then all of space, which no ray starts outside of.
+/// the box is then all of space, which no ray with a finite origin starts outside of.
 struct RootBox {
     static constexpr float kInfinity = std::numeric_limits<float>::infinity();
     alignas(16) float lower[4] = {-kInfinity, -kInfinity, -kInfinity, -kInfinity};  ///< x, y, z

@@ -1,7 +1,6 @@
 #pragma once
 
 #include <algorithm>
-#include <bit>
 #include <cstdint>
 
 #include "rebraid/bvh/leaf_rows.h"
@@ -65,17 +64,10 @@ public:
     /// The rows hold each triangle's primID (prim_id()).
     static constexpr bool kHoldsPrimIds = true;
     /// PrimID of the triangle in `lane`, from its leaf's id row.
-    PrimId prim_id(std::uint32_t lane) const {
-        return std::bit_cast<PrimId>(base_[std::size_t(kCornerRows) * stride_ + lane]);
-    }
+    PrimId prim_id(std::uint32_t lane) const { return leaf_row_prim_id(base_ + lane, stride_); }
     /// Corners of the triangle in `lane`, from its rows.
     TriangleVerts corners(std::uint32_t lane) const {
-        TriangleVerts out;
-        static_assert(sizeof(TriangleVerts) == kCornerRows * sizeof(float));
-        float* values = &out.v0.x;
-        for (std::uint32_t r = 0; r < kCornerRows; ++r)
-            values[r] = base_[std::size_t(r) * stride_ + lane];
-        return out;
+        return leaf_row_corners(base_ + lane, stride_);
     }
     /// Nothing to clear: each test_leaf() sets the lanes anew.
     void clear() {}
