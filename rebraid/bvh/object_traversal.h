@@ -6,7 +6,6 @@
 
 #include "rebraid/bvh/hit_triangle.h"
 #include "rebraid/bvh/leaf_row_hints.h"
-#include "rebraid/bvh/leaf_row_lanes.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/single_leaf_rows.h"
 #include "rebraid/bvh/traversal.h"
@@ -40,10 +39,8 @@ struct NoHitDataPrefetch {
     void operator()(std::uint32_t, Corners&&, std::optional<PrimId>) const {}
 };
 
-/// The triangles of leaves (leaf-order ranges of one BVH) in the lanes of group tests, 8 at a
-/// time, from the corner storage: one leaf per test in the object BVH queries
-/// (test_each_leaf), sibling leaves sharing tests in the merged top level's
-/// (add_leaves_and_test).
+/// The triangles of a leaf (a leaf-order range of one BVH) in the lanes of group tests, 8 at a
+/// time, from the corner storage (test_each_leaf).
 class LeafTriangleLanes {
 public:
     explicit LeafTriangleLanes(const TriangleVerts* triangles) : triangles_(triangles) {}
@@ -97,29 +94,11 @@ private:
     std::uint32_t count_ = 0;
 };
 
-/// Adds the triangles of the leaves bit i of `slots` selects in `refs` to `lanes`
-/// (LeafTriangleLanes or LeafRowLanes), counting them in `counters` when given, calling
-/// `test()` whenever the lanes fill and once at the end for the rest; stops adding leaves
-/// once `is_done()` (any-hit queries: a hit was found). The merged top level's object leaves
-/// are tested so: there, testing each alone (test_each_leaf) traced brainstem's re-braided
-/// structure 4 % slower.
-template <class Lanes, class Test, class IsDone>
-void add_leaves_and_test(Lanes& lanes, const NodeRef* refs, unsigned slots,
-                         TraversalCounters* counters, Test&& test, IsDone&& is_done) {
-    do {
-        const NodeRef leaf = refs[std::countr_zero(slots)];
-        slots &= slots - 1;
-        if (counters) counters->triangles_tested += leaf.prim_count();
-        lanes.add(leaf, test);
-    } while (slots && !is_done());
-    test();
-}
-
 /// Tests the leaves bit i of `slots` selects in `refs`, each on its own in slot order, through
 /// `lanes` (LeafTriangleLanes or SingleLeafRows), counting their triangles in `counters` when
 /// given; `test()` tests what the lanes hold and clears them. Stops once `is_done()` (any-hit
-/// queries: a hit was found). The object BVH queries test leaves so: gathering sibling leaves
-/// into shared tests (add_leaves_and_test) traced the flat BVH 2-8 % slower (docs/design.md,
+/// queries: a hit was found). The object BVH queries and the merged top level test leaves so:
+/// gathering sibling leaves into shared tests traced the flat BVH 2-8 % slower (docs/design.md,
 /// "Leaves"), the gathering's bookkeeping on the path every test waits on.
 template <class Lanes, class Test, class IsDone>
 void test_each_leaf(Lanes& lanes, const NodeRef* refs, unsigned slots, TraversalCounters* counters,

@@ -13,9 +13,9 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 #ifdef REBRAID_SIMD_AVX2
 
 /// One leaf's triangles in the lanes of a group test, straight from its pre-arranged rows
-/// (leaf_rows.h): the object BVH queries test each leaf on its own (test_each_leaf), so the
-/// lanes need no record of which leaf fills which lanes (LeafRowLanes keeps one per shared
-/// test), and a test's row loads wait on nothing but the leaf's reference.
+/// (leaf_rows.h): every query tests each leaf on its own (test_each_leaf), so the lanes need
+/// no record of which leaf fills which lanes, and a test's row loads wait on nothing but the
+/// leaf's reference.
 class SingleLeafRows {
 public:
     explicit SingleLeafRows(const float* rows) : rows_(rows) {}

@@ -390,7 +390,7 @@ inline const TriangleGroupRay& source_triangle_ray(const MergedLeafSource& sourc
     return object_rays.triangle_ray_for(*source.target);
 }
 
-/// Lanes over the leaves of `source`: its rows (LeafRowLanes) or its corners.
+/// Lanes over the leaves of `source`: its rows (SingleLeafRows) or its corners.
 template <class Lanes>
 Lanes source_lanes(const MergedLeafSource& source) {
     if constexpr (std::is_same_v<Lanes, LeafTriangleLanes>)
@@ -405,7 +405,7 @@ Lanes source_lanes(const MergedLeafSource& source) {
 template <class Query>
 auto with_merged_lanes([[maybe_unused]] const MergedTopLevel& merged, Query&& query) {
 #ifdef REBRAID_SIMD_AVX2
-    if (merged.every_source_has_rows) return query.template operator()<LeafRowLanes>();
+    if (merged.every_source_has_rows) return query.template operator()<SingleLeafRows>();
 #endif
     return query.template operator()<LeafTriangleLanes>();
 }
@@ -463,7 +463,7 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
                 }
                 lanes.clear();
             };
-            add_leaves_and_test(lanes, refs, slots, counters, test_lanes, [] { return false; });
+            test_each_leaf(lanes, refs, slots, counters, test_lanes, [] { return false; });
             return false;
         };
         const auto items = [&](NodeRef leaf) {
@@ -505,8 +505,7 @@ template <TriangleTest kTest>
                                                                   world_ray.ray.tfar);
                 lanes.clear();
             };
-            add_leaves_and_test(lanes, refs, slots, nullptr, test_lanes,
-                                [&] { return is_occluded; });
+            test_each_leaf(lanes, refs, slots, nullptr, test_lanes, [&] { return is_occluded; });
             return is_occluded;
         };
         const auto items = [&](NodeRef leaf) { return entries.occluded<kTest>(leaf, object_rays); };
