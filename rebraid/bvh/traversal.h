@@ -34,10 +34,8 @@ enum class LeafVisits {
     /// At an inner node, the leaf children the ray enters are handed over together, before
     /// the node's inner children, as visit_leaf(const NodeRef* refs, unsigned slots) (bit i
     /// of slots selects refs[i]); a leaf start arrives as visit_leaf(&start, 1). For leaves
-    /// of a few triangles: one SIMD test then serves the triangles of several sibling
-    /// leaves, where one test per leaf cost a whole test for a few triangles (the builder's
-    /// leaves hold about 5 of up to 8 on the shared scenes), and the hits found shorten the
-    /// ray before any inner sibling is entered.
+    /// of a few triangles: the visitor tests them in one go, without a stack entry each, and
+    /// the hits found shorten the ray before any inner sibling is entered.
     with_siblings,
     /// Per node, as the visitor says: at an inner node `id` with leaf children the ray enters,
     /// visit_leaf.takes_siblings(id) chooses with_siblings for them (handed over as
