@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <optional>
@@ -45,37 +46,26 @@ class LeafTriangleLanes {
 public:
     explicit LeafTriangleLanes(const TriangleVerts* triangles) : triangles_(triangles) {}
 
-    /// Adds the leaf's triangles; `on_full()` is called (to test and clear the lanes)
-    /// whenever all lanes are taken and more triangles remain.
-    template <class OnFull>
-    void add(NodeRef leaf, OnFull&& on_full) {
-        const TriangleVerts* first = triangles_ + leaf.first_prim();
-        const std::uint32_t count = leaf.prim_count();
-        if (count_ + count <= kTriangleGroupSize) {  // the common case: the leaf fits
-            for (std::uint32_t i = 0; i < count; ++i) lanes_[count_ + i] = first + i;
-            count_ += count;
-            return;
-        }
-        for (std::uint32_t i = 0; i < count; ++i) {
-            if (count_ == kTriangleGroupSize) on_full();
-            lanes_[count_++] = first + i;
-        }
-    }
-    std::uint32_t count() const { return count_; }
-    /// Calls `test()` for the leaf's triangles alone (the lanes are empty), 8 at a time.
+    /// Calls `test()` for the leaf's triangles, 8 at a time (a leaf of more than 8 takes one
+    /// test per 8).
     template <class Test>
     void test_leaf(NodeRef leaf, Test&& test) {
-        add(leaf, test);
-        test();
+        const TriangleVerts* first = triangles_ + leaf.first_prim();
+        const std::uint32_t count = leaf.prim_count();
+        for (std::uint32_t done = 0; done < count; done += kTriangleGroupSize) {
+            count_ = std::min(count - done, kTriangleGroupSize);
+            for (std::uint32_t i = 0; i < count_; ++i) lanes_[i] = first + done + i;
+            test();
+        }
     }
-    /// The closest of the gathered triangles the ray hits within [tnear, tfar], if any, by
+    /// The closest of the lanes' triangles the ray hits within [tnear, tfar], if any, by
     /// the test `kTest` (and its terms in `terms`, when given: intersect_triangle_lanes).
     template <TriangleTest kTest>
     bool intersect(const TriangleGroupRay& ray, float tnear, float tfar, TriangleGroupHit& hit,
                    MollerTerms* terms = nullptr) const {
         return intersect_triangle_lanes<kTest>(lanes_, count_, ray, tnear, tfar, hit, terms);
     }
-    /// Whether the ray hits any of the gathered triangles within [tnear, tfar].
+    /// Whether the ray hits any of the lanes' triangles within [tnear, tfar].
     template <TriangleTest kTest>
     bool occluded(const TriangleGroupRay& ray, float tnear, float tfar) const {
         return occluded_triangle_lanes<kTest>(lanes_, count_, ray, tnear, tfar);
@@ -86,7 +76,6 @@ public:
     }
     /// Corners of the triangle in `lane`.
     TriangleVerts corners(std::uint32_t lane) const { return *lanes_[lane]; }
-    void clear() { count_ = 0; }
 
 private:
     const TriangleVerts* triangles_;
@@ -96,7 +85,7 @@ private:
 
 /// Tests the leaves bit i of `slots` selects in `refs`, each on its own in slot order, through
 /// `lanes` (LeafTriangleLanes or SingleLeafRows), counting their triangles in `counters` when
-/// given; `test()` tests what the lanes hold and clears them. Stops once `is_done()` (any-hit
+/// given; `test()` tests what the lanes hold. Stops once `is_done()` (any-hit
 /// queries: a hit was found). The object BVH queries and the merged top level test leaves so:
 /// gathering sibling leaves into shared tests traced the flat BVH 2-8 % slower (docs/design.md,
 /// "Leaves"), the gathering's bookkeeping on the path every test waits on.
@@ -156,7 +145,6 @@ bool intersect_with_lanes(Lanes& lanes, ObjectBvhView bvh, NodeRef start, Prepar
                 row_prim_id(lanes, group_hit.index));
             found = true;
         }
-        lanes.clear();
     };
     // Sibling leaves before the node's inner children (LeafVisits::with_siblings).
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
@@ -188,7 +176,6 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
     bool is_occluded = false;
     const auto test_lanes = [&] {
         is_occluded = is_occluded || lanes.template occluded<kTest>(group_ray, ray.tnear, ray.tfar);
-        lanes.clear();
     };
     const auto visit_leaves = [&](const NodeRef* refs, unsigned slots) {
         test_each_leaf(lanes, refs, slots, counters, test_lanes, [&] { return is_occluded; });

@@ -69,8 +69,6 @@ public:
     TriangleVerts corners(std::uint32_t lane) const {
         return leaf_row_corners(base_ + lane, stride_);
     }
-    /// Nothing to clear: each test_leaf() sets the lanes anew.
-    void clear() {}
 
 private:
     void load_rows(__m256 (&rows)[kCornerRows]) const {

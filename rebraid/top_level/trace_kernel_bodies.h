@@ -461,7 +461,6 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
                         closer_hit_notifier(observer, source.instance)(*located);
                     }
                 }
-                lanes.clear();
             };
             test_each_leaf(lanes, refs, slots, counters, test_lanes, [] { return false; });
             return false;
@@ -503,7 +502,6 @@ template <TriangleTest kTest>
                 is_occluded =
                     is_occluded || lanes.template occluded<kTest>(source_ray, world_ray.ray.tnear,
                                                                   world_ray.ray.tfar);
-                lanes.clear();
             };
             test_each_leaf(lanes, refs, slots, nullptr, test_lanes, [&] { return is_occluded; });
             return is_occluded;
