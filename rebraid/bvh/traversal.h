@@ -100,7 +100,12 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
         return (std::uint64_t(std::bit_cast<std::uint32_t>(distance)) << 32) | ref.bits();
     };
     TraversalRay& ray = prepared.ray;
-    const NodeBoxTest& box_test = prepared.box_test;
+    // A copy of the ray's box-test values that nothing outside this loop can reach: the
+    // compiler then keeps them in registers across the visitor's code. Read through
+    // `prepared`, whose address the query hands to the code entering items, they were
+    // loaded from memory at every node of a re-braided query (kernel_ab.py, rebraid:
+    // two_cylinder_engine 1.05, cg57_cruiser 1.03, brainstem 1.015; docs/design.md).
+    const NodeBoxTest box_test = prepared.box_test;
     NodeRef current = start;
     for (;;) {
         while (current.is_inner()) {
