@@ -21,6 +21,12 @@ struct PreparedRay {
 
     PreparedRay(Vec3f origin, Vec3f direction, float tnear, float tfar)
         : ray(origin, direction, tnear, tfar), box_test(ray), triangle_ray(origin, direction) {}
+    /// With the reciprocals of `direction` already made.
+    PreparedRay(Vec3f origin, Vec3f direction, float tnear, float tfar,
+                const DirectionReciprocals& reciprocals)
+        : ray(origin, direction, tnear, tfar, reciprocals),
+          box_test(ray),
+          triangle_ray(origin, direction) {}
     PreparedRay(const PreparedRay&) = delete;
     PreparedRay& operator=(const PreparedRay&) = delete;
 };

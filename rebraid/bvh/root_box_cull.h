@@ -23,7 +23,9 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 /// that meet no box, a -0 distance counting as the least: rays outside it that move away.)
 /// A NaN in the ray answers a miss, as the traversal does. The portable kernels reject
 /// nothing here.
-inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]] const Ray& ray) {
+/// `reciprocals` are those of ray.dir.
+inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]] const Ray& ray,
+                            [[maybe_unused]] const DirectionReciprocals& reciprocals) {
 #ifdef REBRAID_SIMD_AVX2
     static_assert(offsetof(Ray, tnear) == offsetof(Ray, org) + 12 &&
                   offsetof(Ray, tfar) == offsetof(Ray, dir) + 12);
@@ -35,7 +37,7 @@ inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]
     const int inside = _mm_movemask_ps(
         _mm_and_ps(_mm_cmp_ps(org, lower, _CMP_GE_OQ), _mm_cmp_ps(org, upper, _CMP_LE_OQ)));
     if ((inside & 7) == 7) return false;
-    const __m128 reciprocal = reciprocal_directions(ray.dir);
+    const __m128 reciprocal = reciprocals.lanes;
     const __m128 is_negative = _mm_cmp_ps(reciprocal, _mm_setzero_ps(), _CMP_NGE_UQ);
     const __m128 near_plane = _mm_blendv_ps(lower, upper, is_negative);
     const __m128 far_plane = _mm_blendv_ps(upper, lower, is_negative);
@@ -56,6 +58,11 @@ inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]
 #else
     return false;
 #endif
+}
+
+/// misses_root_box with the reciprocals made here.
+inline bool misses_root_box(const RootBox& box, const Ray& ray) {
+    return misses_root_box(box, ray, DirectionReciprocals(ray.dir));
 }
 
 }  // namespace REBRAID_SIMD_NAMESPACE

@@ -65,6 +65,19 @@ inline __m128 reciprocal_directions(Vec3f direction) {
 }
 #endif
 
+/// The reciprocals of a ray's direction as the box tests take them (reciprocal_directions), made
+/// once per query: the root-box cull (misses_root_box) and the prepared world ray both read them,
+/// where each used to divide on its own (one division on the path of every ray from outside the
+/// scene's box). The portable kernels compute them in TraversalRay.
+struct DirectionReciprocals {
+#ifdef REBRAID_SIMD_AVX2
+    __m128 lanes;  ///< x, y, z, then 1
+    explicit DirectionReciprocals(Vec3f direction) : lanes(reciprocal_directions(direction)) {}
+#else
+    explicit DirectionReciprocals(Vec3f) {}
+#endif
+};
+
 /// A ray prepared for box tests: reciprocal direction with zero components replaced by tiny
 /// ones (so no 0 * inf appears) and the sign of each axis, from which a box test takes the
 /// plane arrays the ray enters and leaves a box through (slab_plane_offset).
@@ -79,13 +92,17 @@ struct TraversalRay {
     std::uint32_t negative_axes = 0;
 
     TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far)
+        : TraversalRay(origin, direction, t_near, t_far, DirectionReciprocals(direction)) {}
+    /// With the reciprocals of `direction` already made.
+    TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far,
+                 [[maybe_unused]] const DirectionReciprocals& reciprocals)
         : org(origin), dir(direction), tnear(t_near), tfar(t_far) {
 #ifdef REBRAID_SIMD_AVX2
         // The three axes in the lanes of one register: every ray and every entry into an
         // instance's space pays this set-up, and the scalar form (a branch and a division per
         // axis) cost as many instructions as a rejected ray's whole traversal. Same IEEE
         // operations per lane, so the same reciprocals.
-        const __m128 reciprocal = reciprocal_directions(direction);
+        const __m128 reciprocal = reciprocals.lanes;
         alignas(16) float lanes[4];
         _mm_store_ps(lanes, reciprocal);
         rdir = {lanes[0], lanes[1], lanes[2]};

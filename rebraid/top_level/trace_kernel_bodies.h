@@ -31,11 +31,12 @@ template <TriangleTest kTest>
 [[gnu::flatten]] Hit flat_intersect(const FlatAccel& accel, const Ray& ray,
                                     TraversalCounters* counters) {
     Hit hit;  // one object every return names: built in place for the caller
-    if (misses_root_box(accel.root_box(), ray)) {
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
         count_root_visit(counters);
         return hit;
     }
-    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
     // Where the leaf rows name instance and primID in one word (FlatHitIds), the closest hit's
     // word comes from the leaf just tested. Otherwise world triangles are numbered in leaf
     // order, the hit's leaf position indexes the tables, and since that lookup after the
@@ -70,8 +71,9 @@ template <TriangleTest kTest>
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool flat_occluded(const FlatAccel& accel, const Ray& ray) {
-    if (misses_root_box(accel.root_box(), ray)) return false;
-    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
     return occluded_object_bvh<kTest>(accel.bvh(), accel.bvh().root, traversal_ray, nullptr);
 }
 
@@ -179,10 +181,12 @@ struct SoleItemStart {
     StartLeaf start_leaf;
     std::optional<PreparedRay> ray;
 
-    SoleItemStart(const InstancedAccel& accel, const Ray& world_ray)
+    /// `reciprocals` are those of world_ray.dir.
+    SoleItemStart(const InstancedAccel& accel, const Ray& world_ray,
+                  const DirectionReciprocals& reciprocals)
         : item(accel.sole_item()), start_leaf(start_leaf_of(accel.top_level())) {
         if (item.target.space == InstanceTarget::kWorldSpace) {
-            ray.emplace(world_ray.org, world_ray.dir, world_ray.tnear, world_ray.tfar);
+            ray.emplace(world_ray.org, world_ray.dir, world_ray.tnear, world_ray.tfar, reciprocals);
             return;
         }
         Vec3f org, dir;
@@ -197,13 +201,14 @@ template <TriangleTest kTest>
 Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                           HitTriangle* located, const CloserHitObserver* observer) {
     Hit hit;  // one object every return names: built in place for the caller
-    if (misses_root_box(accel.root_box(), ray)) {
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
         // Counted as the query it stands in for: the entry, then its root's box test.
         if (counters) ++counters->object_entries;
         count_root_visit(counters);
         return hit;
     }
-    SoleItemStart start(accel, ray);
+    SoleItemStart start(accel, ray, reciprocals);
     if (counters) ++counters->object_entries;
     if (intersect_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, hit, counters,
                                     located, closer_hit_notifier(observer, start.item.instance),
@@ -214,8 +219,9 @@ Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, Traversal
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
-    if (misses_root_box(accel.root_box(), ray)) return false;
-    SoleItemStart start(accel, ray);
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
+    SoleItemStart start(accel, ray, reciprocals);
     return occluded_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, nullptr,
                                       start.start_leaf);
 }
@@ -328,11 +334,12 @@ template <TriangleTest kTest>
 Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                           HitTriangle* located, const CloserHitObserver* observer) {
     Hit hit;  // one object every return names: built in place for the caller
-    if (misses_root_box(accel.root_box(), ray)) {
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
         count_root_visit(counters);
         return hit;
     }
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
     ObjectRayCache object_rays(world_ray);
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
@@ -354,8 +361,9 @@ Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray, Traversal
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
-    if (misses_root_box(accel.root_box(), ray)) return false;
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
     ObjectRayCache object_rays(world_ray);
     const ItemEntries entries(accel);
     // Any order: the first hit ends the query.
@@ -415,14 +423,15 @@ auto with_merged_lanes([[maybe_unused]] const MergedTopLevel& merged, Query&& qu
 template <TriangleTest kTest>
 Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                        HitTriangle* located, const CloserHitObserver* observer) {
-    if (misses_root_box(accel.root_box(), ray)) {
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
         count_root_visit(counters);
         return Hit{};
     }
     const MergedTopLevel& merged = accel.merged_top_level();
     return with_merged_lanes(merged, [&]<class Lanes>() {
         Hit hit;
-        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
         ObjectRayCache object_rays(world_ray);
         const ItemEntries entries(accel);
         // A hit in a merged object leaf read from the corner storage keeps its leaf-order
@@ -486,10 +495,11 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool merged_occluded(const InstancedAccel& accel, const Ray& ray) {
-    if (misses_root_box(accel.root_box(), ray)) return false;
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
     const MergedTopLevel& merged = accel.merged_top_level();
     return with_merged_lanes(merged, [&]<class Lanes>() {
-        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar);
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
         ObjectRayCache object_rays(world_ray);
         const ItemEntries entries(accel);
         const auto object_leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
