@@ -60,10 +60,5 @@ inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]
 #endif
 }
 
-/// misses_root_box with the reciprocals made here.
-inline bool misses_root_box(const RootBox& box, const Ray& ray) {
-    return misses_root_box(box, ray, DirectionReciprocals(ray.dir));
-}
-
 }  // namespace REBRAID_SIMD_NAMESPACE
 }  // namespace rebraid
