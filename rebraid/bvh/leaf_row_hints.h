@@ -17,6 +17,15 @@ inline constexpr int kLeafRowHintLineShift = 27;
 /// caches (two_cylinder_engine's flat BVH 0.96 of the speed without hints at 31 lines, 0.99
 /// at 6, 1.01 at 4; the default scene's 1.05, 1.08 and 1.05; docs/design.md).
 inline constexpr std::uint32_t kMaxLeafRowHintLines = 6;
+/// The bits of the line count: the two above them stay free (a merged top level's copied
+/// nodes flag the words that name their source with the top one, MergedTopLevel).
+inline constexpr std::uint32_t kLeafRowHintLineMask = 7;
+static_assert(kMaxLeafRowHintLines <= kLeafRowHintLineMask);
+
+/// The cache lines hint `hint` asks for (0: none).
+constexpr std::uint32_t leaf_row_hint_lines(std::uint32_t hint) {
+    return (hint >> kLeafRowHintLineShift) & kLeafRowHintLineMask;
+}
 
 /// The hint for entering `node`: its first leaf child's rows and those of the leaf children
 /// after it whose triangles follow in leaf order (0 without leaf children).
@@ -36,8 +45,12 @@ void write_leaf_row_hints(std::vector<WideNode>& nodes);
 struct LeafRowsPrefetch {
     const float* rows;
     void operator()(NodeRef) const {}
-    void rows_of_child(NodeRef, std::uint32_t hint) const {
-        const std::uint32_t lines = hint >> kLeafRowHintLineShift;
+    void rows_of_child(const WideNode& node, std::uint32_t /*node_id*/, int slot) const {
+        prefetch_rows(rows, node.leaf_row_hints[slot]);
+    }
+    /// Asks for the lines `hint` names in `rows`.
+    static void prefetch_rows(const float* rows, std::uint32_t hint) {
+        const std::uint32_t lines = leaf_row_hint_lines(hint);
         // Computed as an integer, so that no pointer past the rows is ever formed; a prefetch
         // never faults.
         const std::uintptr_t first =

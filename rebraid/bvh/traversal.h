@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 
 #include "rebraid/bvh/node_box_test.h"
 #include "rebraid/bvh/prepared_ray.h"
@@ -64,7 +65,9 @@ struct NoLeafPrefetch {
 /// `prefetch_leaf(NodeRef leaf)` is called for hit leaves that wait on the stack (leaves
 /// visited one by one), and every stacked inner node is prefetched: on scenes larger
 /// than the caches, the misses of the siblings then overlap with the work on the nearest
-/// child instead of following it.
+/// child instead of following it. A prefetcher with `rows_of_child(node, node_id, slot)` is
+/// also told each inner child the traversal descends into without the stack
+/// (LeafRowsPrefetch, leaf_row_hints.h).
 template <TraversalOrder order = TraversalOrder::nearest_first,
           LeafVisits leaf_visits = LeafVisits::one_by_one, class LeafVisitor,
           class LeafPrefetcher = NoLeafPrefetch>
@@ -74,7 +77,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
     constexpr bool kWithSiblings = leaf_visits == LeafVisits::with_siblings;
     constexpr bool kByNode = leaf_visits == LeafVisits::by_node;
     constexpr bool kPrefetchesRows = requires {
-        prefetch_leaf.rows_of_child(NodeRef(), 0u);
+        prefetch_leaf.rows_of_child(std::declval<const WideNode&>(), 0u, 0);
     };
     if constexpr (kWithSiblings) {
         if (start.is_leaf()) return visit_leaf(&start, 1u);
@@ -109,7 +112,8 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
     NodeRef current = start;
     for (;;) {
         while (current.is_inner()) {
-            const WideNode& node = nodes[current.node_id()];
+            const std::uint32_t node_id = current.node_id();
+            const WideNode& node = nodes[node_id];
             // The child references sit on the node's last cache line, which is read only once
             // the box test is done; asking for it now overlaps its miss with the test's.
             __builtin_prefetch(node.children);
@@ -118,8 +122,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
             unsigned mask = box_test(node, ray.tfar, distances);
             if constexpr (kWithSiblings || kByNode) {
                 bool node_takes_siblings = true;
-                if constexpr (kByNode)
-                    node_takes_siblings = visit_leaf.takes_siblings(current.node_id());
+                if constexpr (kByNode) node_takes_siblings = visit_leaf.takes_siblings(node_id);
                 const unsigned leaf_mask = node_takes_siblings ? mask & leaf_slots(node) : 0u;
                 if (leaf_mask != 0) {
                     bool stop;
@@ -141,8 +144,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
             mask &= mask - 1;
             if (mask == 0) {  // one child hit: descend without touching the stack
                 current = node.children[first];
-                if constexpr (kPrefetchesRows)
-                    prefetch_leaf.rows_of_child(current, node.leaf_row_hints[first]);
+                if constexpr (kPrefetchesRows) prefetch_leaf.rows_of_child(node, node_id, first);
                 continue;
             }
             if constexpr (order == TraversalOrder::any) {
@@ -163,7 +165,7 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
                 stack[stack_size++] = make_entry(node.children[far_slot], distances[far_slot]);
                 current = node.children[near_slot];
                 if constexpr (kPrefetchesRows)
-                    prefetch_leaf.rows_of_child(current, node.leaf_row_hints[near_slot]);
+                    prefetch_leaf.rows_of_child(node, node_id, near_slot);
                 continue;
             }
             // Three or more: push them all, sort the pushed run far to near (insertion sort,

@@ -7,6 +7,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/bvh/vertex_world_bounds.h"
 #include "rebraid/core/huge_pages.h"
 
@@ -58,15 +59,25 @@ void copy_subtree(MergedTopLevel& merged, const ObjectBvhView& bvh, std::uint32_
         const std::uint32_t id = pending.back();
         pending.pop_back();
         WideNode& node = merged.nodes[id];
+        const std::uint32_t source_word = MergedTopLevel::kSourceWordFlag | source;
+        int fewest_lines_slot = 0;
+        bool names_source = false;
         for (int slot = 0; slot < kBvhWidth; ++slot) {
             NodeRef& child = node.children[slot];
-            // Leaf slots carry no hint: their words name the source (source_of_leaves).
-            if (child.is_leaf()) node.leaf_row_hints[slot] = source;
-            if (!child.is_inner()) continue;
+            // Leaf and empty slots carry no hint: their words name the source.
+            if (!child.is_inner()) {
+                node.leaf_row_hints[slot] = source_word;
+                names_source = true;
+                continue;
+            }
+            if (leaf_row_hint_lines(node.leaf_row_hints[slot]) <=
+                leaf_row_hint_lines(node.leaf_row_hints[fewest_lines_slot]))
+                fewest_lines_slot = slot;
             const std::uint32_t copy = place(child);
             child = NodeRef::inner(copy);
             pending.push_back(copy);
         }
+        if (!names_source) node.leaf_row_hints[fewest_lines_slot] = source_word;
     }
 }
 
@@ -169,6 +180,8 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
         slots = std::move(world_slots);
         first_node = std::move(world_first);
     }
+    // A source's index sits below the flag and the hint's line count in a hint word.
+    if (slots.size() > NodeRef::kMaxFirst) return merged;
     first_node[0] = std::uint32_t(top.nodes.size());
     std::uint64_t node_count = first_node[0];
     for (std::size_t i = 0; i < slots.size(); ++i) {
@@ -201,6 +214,8 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     for (const MergedLeafSource& source : merged.sources)
         merged.every_source_has_rows = merged.every_source_has_rows && source.leaf_rows != nullptr;
     merged.root = top.root;
+    if (std::ranges::any_of(views, &ObjectBvhView::prefetches_rows))
+        merged.rows_prefetch_from = merged.first_object_node;
     return merged;
 }
 

@@ -63,6 +63,12 @@ struct TopLevelMergeSettings {
 /// mesh's leaf order, and its subtree's source says where those are. The top level itself
 /// (TopLevelBvh) is unchanged: statistics and structure hashes read it.
 struct MergedTopLevel {
+    /// The top bit of a copied node's hint word that names the node's source (its index in
+    /// `sources` below the bit) instead of a child's rows. Every leaf or empty slot's word
+    /// names it, and a node of eight inner children gives up the hint of the child whose
+    /// rows span the fewest lines for it, so that every copied node names its source.
+    static constexpr std::uint32_t kSourceWordFlag = 0x80000000u;
+
     std::vector<WideNode> nodes;
     /// Nodes from this id on are copied object nodes; below it, the top level's own, whose
     /// leaves are top-level items.
@@ -72,6 +78,12 @@ struct MergedTopLevel {
     std::vector<MergedLeafSource> sources;
     /// Every source has pre-arranged rows: the SIMD kernels read rows only (one loop).
     bool every_source_has_rows = true;
+    /// Copied nodes from this id on ask for the leaf rows of the inner children the traversal
+    /// descends into (their hint words, in their source's rows), as an object BVH's
+    /// traversal does (LeafRowsPrefetch): from first_object_node where the structure's rows
+    /// outgrow the caches (its views' ObjectBvhView::prefetches_rows), past every node
+    /// elsewhere.
+    std::uint32_t rows_prefetch_from = NodeRef::kEmptyBits;
     /// The top level's root; empty when nothing was merged (traversal takes the top level).
     NodeRef root = NodeRef::empty();
 
@@ -79,11 +91,15 @@ struct MergedTopLevel {
     bool is_object_node(std::uint32_t node_id) const { return node_id >= first_object_node; }
     /// The source of copied object node `node`'s leaf children, `leaf_slots` the mask of some
     /// of them (not empty): read from the node itself, whose leaf slots keep their source's
-    /// index in the hint words leaf_row_hints leaves unused there, so that testing the leaves
-    /// waits on no load beyond the node's own (a table per copied node missed the cache on
-    /// large scenes).
+    /// index in the hint words leaf_row_hints leaves unused there (kSourceWordFlag), so that
+    /// testing the leaves waits on no load beyond the node's own (a table per copied node
+    /// missed the cache on large scenes).
     const MergedLeafSource& source_of_leaves(const WideNode& node, unsigned leaf_slots) const {
-        return sources[node.leaf_row_hints[std::countr_zero(leaf_slots)]];
+        return source_named_by(node.leaf_row_hints[std::countr_zero(leaf_slots)]);
+    }
+    /// The source a hint word carrying kSourceWordFlag names.
+    const MergedLeafSource& source_named_by(std::uint32_t word) const {
+        return sources[word & ~kSourceWordFlag];
     }
     std::uint64_t memory_bytes() const {
         return nodes.size() * sizeof(WideNode) + sources.size() * sizeof(MergedLeafSource);

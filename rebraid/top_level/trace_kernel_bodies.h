@@ -327,6 +327,41 @@ struct ItemEntries {
     }
 };
 
+/// The slots of copied node `node` whose hint words name its source
+/// (MergedTopLevel::kSourceWordFlag): never none.
+inline unsigned source_word_slots(const WideNode& node) {
+#ifdef REBRAID_SIMD_AVX2
+    // The flag is each word's top bit, i.e. the sign bit of the 8 lanes.
+    static_assert(MergedTopLevel::kSourceWordFlag == 0x80000000u);
+    return unsigned(
+        _mm256_movemask_ps(_mm256_loadu_ps(reinterpret_cast<const float*>(node.leaf_row_hints))));
+#else
+    unsigned slots = 0;
+    for (int i = 0; i < kBvhWidth; ++i)
+        slots |= unsigned((node.leaf_row_hints[i] & MergedTopLevel::kSourceWordFlag) != 0) << i;
+    return slots;
+#endif
+}
+
+/// The merged query's prefetcher: a stacked item's target (ItemEntries::prefetch), and, where
+/// the structure's rows outgrow the caches (MergedTopLevel::rows_prefetch_from), the leaf rows
+/// of the inner child of a copied node the traversal descends into: the child's hint, in the
+/// rows of the source the node names.
+struct MergedRowsPrefetch {
+    const ItemEntries& entries;
+    const MergedTopLevel& merged;
+    std::uint32_t prefetch_from;
+
+    void operator()(NodeRef leaf) const { entries.prefetch(leaf); }
+    void rows_of_child(const WideNode& node, std::uint32_t node_id, int slot) const {
+        if (node_id < prefetch_from) return;
+        const std::uint32_t source_word =
+            node.leaf_row_hints[std::countr_zero(source_word_slots(node))];
+        LeafRowsPrefetch::prefetch_rows(merged.source_named_by(source_word).leaf_rows,
+                                        node.leaf_row_hints[slot]);
+    }
+};
+
 /// The closest hit of an instanced structure; with `located` given, also where the hit
 /// triangle is kept and its corners (intersect_object_bvh), and `observer` (when not null)
 /// told of each closer hit.
@@ -482,12 +517,12 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
         };
         MergedLeafVisitor<decltype(object_leaves), decltype(items)> visitor{merged, object_leaves,
                                                                             items};
-        // The targets of stacked items. Copied object nodes' leaf rows are not asked for as
-        // the traversal enters them, as a flat BVH's are: it measured no faster on any merged
-        // scene (docs/design.md).
-        const auto prefetch_item = [&entries](NodeRef leaf) { entries.prefetch(leaf); };
+        // Rows are asked for only where the lanes read them.
+        constexpr bool kReadsRows = !std::is_same_v<Lanes, LeafTriangleLanes>;
+        const MergedRowsPrefetch prefetch{
+            entries, merged, kReadsRows ? merged.rows_prefetch_from : NodeRef::kEmptyBits};
         traverse_bvh<TraversalOrder::nearest_first, LeafVisits::by_node>(
-            merged.nodes.data(), merged.root, world_ray, counters, visitor, prefetch_item);
+            merged.nodes.data(), merged.root, world_ray, counters, visitor, prefetch);
         if (hit_prim_ids != nullptr) hit.prim_id = hit_prim_ids[hit.prim_id];
         return hit;
     });

@@ -16,6 +16,7 @@
 #include "rebraid/generators/default_scene.h"
 #include "rebraid/generators/mesh_generators.h"
 #include "rebraid/generators/random_rays.h"
+#include "rebraid/generators/world_space_objects.h"
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/top_level/flat_accel.h"
 #include "rebraid/top_level/instanced_accel.h"
@@ -241,6 +242,22 @@ TEST(LeafRows, AskedForAheadOnlyWhereTheStructuresRowsOutgrowTheCaches) {
     }
     EXPECT_GE(row_floats * sizeof(float), kLeafRowPrefetchMinBytes);
     for (const ObjectBvhView& view : two_level.object_views()) EXPECT_TRUE(view.prefetches_rows);
+
+    // The same meshes in world space, merged into the top level: its copied nodes ask for
+    // rows too (MergedTopLevel::rows_prefetch_from), for the same hits as entering the items,
+    // which ask for them in their object BVHs' traversals (the helper compares any two
+    // structures that must answer alike).
+    const Scene world = bake_instances_into_world_space(copies);
+    RebraidSettings merge, no_merge;
+    no_merge.merge_world_space = false;
+    InstancedAccel merged = build_rebraid_accel(world, own_object_bvh_builder(), merge);
+    InstancedAccel entered = build_rebraid_accel(world, own_object_bvh_builder(), no_merge);
+    ASSERT_FALSE(merged.merged_top_level().empty());
+    EXPECT_EQ(merged.merged_top_level().rows_prefetch_from,
+              merged.merged_top_level().first_object_node);
+    EXPECT_TRUE(entered.merged_top_level().empty());
+    const std::vector<Ray> rays = generate_random_rays(world.bounds(), 20000, 12);
+    expect_same_with_and_without_rows(merged, entered, rays);
 }
 
 }  // namespace

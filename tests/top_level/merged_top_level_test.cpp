@@ -13,6 +13,7 @@
 #include <cstring>
 #include <vector>
 
+#include "rebraid/bvh/leaf_row_hints.h"
 #include "rebraid/core/simd_level.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/generators/world_space_objects.h"
@@ -57,6 +58,38 @@ bool same_child_box(const WideNode& a, const WideNode& b, int slot) {
     return std::memcmp(&box_a, &box_b, sizeof(BBox3f)) == 0;
 }
 
+/// Checks copied node `copy`'s hint words against those of `original`, the object node it
+/// copies (MergedTopLevel::kSourceWordFlag): leaf and empty slots name `source`; inner slots
+/// keep their hints, but where every slot is inner, one of them, whose hint asked for the
+/// fewest lines, names `source` instead.
+void expect_hint_words(const WideNode& original, const WideNode& copy, std::uint32_t source) {
+    const std::uint32_t source_word = MergedTopLevel::kSourceWordFlag | source;
+    int inner_slots = 0, given_up = -1;
+    for (int slot = 0; slot < kBvhWidth; ++slot) {
+        const std::uint32_t word = copy.leaf_row_hints[slot];
+        if (!original.children[slot].is_inner()) {
+            EXPECT_EQ(word, source_word) << slot;
+            continue;
+        }
+        ++inner_slots;
+        if (word == original.leaf_row_hints[slot]) {
+            EXPECT_EQ(word & MergedTopLevel::kSourceWordFlag, 0u) << slot;
+            continue;
+        }
+        EXPECT_EQ(word, source_word) << slot;
+        EXPECT_EQ(given_up, -1) << "a second inner slot gave up its hint: " << slot;
+        given_up = slot;
+    }
+    if (inner_slots < kBvhWidth) {
+        EXPECT_EQ(given_up, -1);
+        return;
+    }
+    ASSERT_NE(given_up, -1) << "a node of inner children only names no source";
+    for (int slot = 0; slot < kBvhWidth; ++slot)
+        EXPECT_LE(leaf_row_hint_lines(original.leaf_row_hints[given_up]),
+                  leaf_row_hint_lines(original.leaf_row_hints[slot]));
+}
+
 /// Checks that the copy below `copy` is the object subtree below `original` node for node
 /// (same boxes, same leaves, inner children copied), its leaves taking `source`
 /// (source_of_leaves), each copied node reached once (`reached`, indexed by merged node id).
@@ -68,6 +101,7 @@ void expect_same_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
     ++reached[copy.node_id()];
     const WideNode& a = bvh.nodes[original.node_id()];
     const WideNode& b = merged.nodes[copy.node_id()];
+    expect_hint_words(a, b, source);
     for (int slot = 0; slot < kBvhWidth; ++slot) {
         const NodeRef child = a.children[slot];
         EXPECT_TRUE(same_child_box(a, b, slot));
@@ -147,6 +181,7 @@ void expect_world_boxed_subtree(const MergedTopLevel& merged, const ObjectBvhVie
     ++reached[copy.node_id()];
     const WideNode& a = bvh.nodes[original.node_id()];
     const WideNode& b = merged.nodes[copy.node_id()];
+    expect_hint_words(a, b, source);
     for (int slot = 0; slot < kBvhWidth; ++slot) {
         const NodeRef child = a.children[slot];
         if (child.is_empty()) {
@@ -221,6 +256,29 @@ TEST(MergedTopLevel, MergesPlacedItemsOnlyWhenAskedAndWithinTheirBudget) {
     EXPECT_TRUE(rebraided(placed_scene(), true, false).merged_top_level().empty());
     EXPECT_TRUE(rebraided(placed_scene(), true, true, 0.0f).merged_top_level().empty());
     EXPECT_FALSE(rebraided(placed_scene(), true, true, 100.0f).merged_top_level().empty());
+}
+
+// Copied nodes ask for their children's rows where the structure's rows outgrow the caches,
+// as its object BVHs' traversals do (ObjectBvhView::prefetches_rows), and nowhere else.
+TEST(MergedTopLevel, AsksForRowsAheadWhereItsObjectBvhsDo) {
+    const Scene scene = world_space_scene();
+    const InstancedAccel accel = rebraided(scene, true);
+    const MergedTopLevel& small = accel.merged_top_level();
+    ASSERT_FALSE(small.empty());
+    ASSERT_FALSE(accel.object_views().front().prefetches_rows);
+    EXPECT_EQ(small.rows_prefetch_from, NodeRef::kEmptyBits);
+
+    std::vector<ObjectBvhView> views = accel.object_views();
+    for (ObjectBvhView& view : views) view.prefetches_rows = true;
+    std::vector<AffineTransform> object_to_world;
+    for (const Instance& instance : scene.instances)
+        object_to_world.push_back(instance.object_to_world);
+    // (The node count only sizes the placed items' budget: none are placed here.)
+    const MergedTopLevel large = merge_top_level_items(accel.top_level(), accel.instance_targets(),
+                                                       views, object_to_world, 0);
+    ASSERT_FALSE(large.empty());
+    EXPECT_EQ(large.rows_prefetch_from, large.first_object_node);
+    EXPECT_EQ(large.nodes.size(), small.nodes.size());
 }
 
 class MergedRays : public ::testing::TestWithParam<bool> {};
