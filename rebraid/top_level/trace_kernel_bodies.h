@@ -12,6 +12,7 @@
 #include "rebraid/bvh/root_box_cull.h"
 #include "rebraid/bvh/traversal.h"
 #include "rebraid/core/simd_config.h"
+#include "rebraid/top_level/returned_hit.h"
 
 namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
@@ -28,9 +29,8 @@ inline void count_root_visit(TraversalCounters* counters) {
 }
 
 template <TriangleTest kTest>
-[[gnu::flatten]] Hit flat_intersect(const FlatAccel& accel, const Ray& ray,
-                                    TraversalCounters* counters) {
-    Hit hit;  // one object every return names: built in place for the caller
+Hit flat_closest_hit(const FlatAccel& accel, const Ray& ray, TraversalCounters* counters) {
+    Hit hit;  // one object every return names: no copy between the returns
     const DirectionReciprocals reciprocals(ray.dir);
     if (misses_root_box(accel.root_box(), ray, reciprocals)) {
         count_root_visit(counters);
@@ -67,6 +67,12 @@ template <TriangleTest kTest>
         }
     }
     return hit;
+}
+
+template <TriangleTest kTest>
+[[gnu::flatten]] Hit flat_intersect(const FlatAccel& accel, const Ray& ray,
+                                    TraversalCounters* counters) {
+    return returned_hit(flat_closest_hit<kTest>(accel, ray, counters));
 }
 
 template <TriangleTest kTest>
@@ -200,7 +206,7 @@ struct SoleItemStart {
 template <TriangleTest kTest>
 Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                           HitTriangle* located, const CloserHitObserver* observer) {
-    Hit hit;  // one object every return names: built in place for the caller
+    Hit hit;  // one object every return names: no copy between the returns
     const DirectionReciprocals reciprocals(ray.dir);
     if (misses_root_box(accel.root_box(), ray, reciprocals)) {
         // Counted as the query it stands in for: the entry, then its root's box test.
@@ -368,7 +374,7 @@ struct MergedRowsPrefetch {
 template <TriangleTest kTest>
 Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                           HitTriangle* located, const CloserHitObserver* observer) {
-    Hit hit;  // one object every return names: built in place for the caller
+    Hit hit;  // one object every return names: no copy between the returns
     const DirectionReciprocals reciprocals(ray.dir);
     if (misses_root_box(accel.root_box(), ray, reciprocals)) {
         count_root_visit(counters);
@@ -567,14 +573,14 @@ template <TriangleTest kTest>
 template <auto closest_hit>
 [[gnu::flatten]] Hit intersect_entry(const InstancedAccel& accel, const Ray& ray,
                                      TraversalCounters* counters) {
-    return closest_hit(accel, ray, counters, nullptr, nullptr);
+    return returned_hit(closest_hit(accel, ray, counters, nullptr, nullptr));
 }
 
 template <auto closest_hit>
 [[gnu::flatten]] LocatedHit intersect_located_entry(const InstancedAccel& accel, const Ray& ray,
                                                     const CloserHitObserver* observer) {
     LocatedHit located;
-    located.hit = closest_hit(accel, ray, nullptr, &located.triangle, observer);
+    located.hit = returned_hit(closest_hit(accel, ray, nullptr, &located.triangle, observer));
     return located;
 }
 
