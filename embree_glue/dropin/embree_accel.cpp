@@ -236,87 +236,104 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     intersect_within_bounds(rayhit);
 }
 
-/// Embree's attributes of a hit: of each closer hit as the query finds it (the last one
-/// computed is the closest hit's), so that a recomputation overlaps the rest of the traversal
-/// instead of following it; or, where the query gives Embree's own terms
-/// (finishes_moller_terms_), once for the closest hit after the query.
+namespace {
+
+/// True when a coordinate of `ray` is zero: mapping it through an identity transform, as
+/// Embree does for an instance placed by the identity (which our traversal enters with the
+/// world ray itself), may flip a zero's sign.
+bool has_zero_coordinate(const Ray& ray) {
+    return ray.org.x == 0.0f || ray.org.y == 0.0f || ray.org.z == 0.0f || ray.dir.x == 0.0f ||
+           ray.dir.y == 0.0f || ray.dir.z == 0.0f;
+}
+
+/// Writes a hit into `rayhit`: Embree's attributes where its arithmetic gave them, else (a
+/// grazing hit Embree's rounding calls parallel, which it would not report) the traversal's
+/// own t, u, v and the normal of `corners`.
+void write_hit(RTCRayHit& rayhit, const Hit& hit, const glue::EmbreeHitIds& ids,
+               const std::optional<glue::EmbreeHitAttributes>& embree_hit,
+               const TriangleVerts& corners) {
+    RTCRay& ray = rayhit.ray;
+    if (embree_hit) {
+        // Embree's t when it lies in the ray's interval (it does but for rounding at the
+        // interval's ends), so that t, u and v describe the same point.
+        const float t = embree_hit->t;
+        ray.tfar = t >= ray.tnear && t <= ray.tfar ? t : hit.t;
+        rayhit.hit.Ng_x = embree_hit->geometry_normal.x;
+        rayhit.hit.Ng_y = embree_hit->geometry_normal.y;
+        rayhit.hit.Ng_z = embree_hit->geometry_normal.z;
+        rayhit.hit.u = embree_hit->u;
+        rayhit.hit.v = embree_hit->v;
+    } else {
+        const Vec3f normal = cross(corners.v2 - corners.v0, corners.v0 - corners.v1);
+        ray.tfar = hit.t;
+        rayhit.hit.Ng_x = normal.x;
+        rayhit.hit.Ng_y = normal.y;
+        rayhit.hit.Ng_z = normal.z;
+        rayhit.hit.u = hit.u;
+        rayhit.hit.v = hit.v;
+    }
+    rayhit.hit.primID = hit.prim_id;
+    rayhit.hit.geomID = ids.geom_id;
+    rayhit.hit.instID[0] = ids.inst_id;
+}
+
+}  // namespace
+
+/// Embree's attributes of each closer hit as the query finds it (the last one computed is the
+/// closest hit's), so that their recomputation overlaps the rest of the traversal instead of
+/// following it: where the query does not give Embree's own terms.
 struct EmbreeAccel::PendingAttributes {
     const EmbreeAccel& accel;
     const Ray& ray;
     std::optional<glue::EmbreeHitAttributes> attributes;
 
-    /// True when a coordinate of `ray` is zero: mapping it through an identity transform, as
-    /// Embree does for an instance placed by the identity (which our traversal enters with
-    /// the world ray itself), may flip a zero's sign.
-    static bool has_zero_coordinate(const Ray& ray) {
-        return ray.org.x == 0.0f || ray.org.y == 0.0f || ray.org.z == 0.0f || ray.dir.x == 0.0f ||
-               ray.dir.y == 0.0f || ray.dir.z == 0.0f;
-    }
-
     static void on_closer_hit(void* context, InstanceId instance, const HitTriangle& triangle) {
         auto& pending = *static_cast<PendingAttributes*>(context);
-        const EmbreeAccel& accel = pending.accel;
-        const TriangleVerts& corners = triangle.corners;
-        const bool is_instanced =
-            accel.converted_.instance_ids[instance].inst_id != RTC_INVALID_GEOMETRY_ID;
-        // Our traversal finds the triangle and t; the reported attributes must be Embree's to
-        // the last bit. The SIMD kernels' Möller test computed Embree's own terms (the ray in
-        // Embree's object space: set_world_to_object), so Embree's reciprocal finishes them;
-        // otherwise they are computed again the way Embree computes them (its world-to-object
-        // map, its kernel's rounding).
-        if (accel.finishes_moller_terms_ && triangle.has_moller_terms &&
-            !(is_instanced &&
-              accel.accel_->instance_targets()[instance].space == InstanceTarget::kWorldSpace &&
-              has_zero_coordinate(pending.ray))) {
-            pending.attributes =
-                glue::embree_hit_attributes_from_terms(triangle.moller_terms, accel.arithmetic_);
-            return;
-        }
-        pending.attributes = glue::embree_hit_attributes(
-            pending.ray, is_instanced ? &accel.embree_world_to_object_[instance] : nullptr,
-            {corners.v0, corners.v1, corners.v2}, accel.arithmetic_);
+        pending.attributes = pending.accel.recomputed_attributes(pending.ray, instance, triangle);
     }
 };
 
+std::optional<glue::EmbreeHitAttributes> EmbreeAccel::recomputed_attributes(
+    const Ray& ray, InstanceId instance, const HitTriangle& triangle) const noexcept {
+    const bool is_instanced = converted_.instance_ids[instance].inst_id != RTC_INVALID_GEOMETRY_ID;
+    const TriangleVerts& corners = triangle.corners;
+    return glue::embree_hit_attributes(ray,
+                                       is_instanced ? &embree_world_to_object_[instance] : nullptr,
+                                       {corners.v0, corners.v1, corners.v2}, arithmetic_);
+}
+
 void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
-    const RTCRay& in = rayhit.ray;
-    const Ray ray = glue::from_embree_ray(in);
-    PendingAttributes pending{*this, ray, std::nullopt};
-    const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
-    const LocatedHit located =
-        accel_->intersect_located(ray, finishes_moller_terms_ ? nullptr : &observer);
+    const Ray ray = glue::from_embree_ray(rayhit.ray);
+    if (!finishes_moller_terms_) {
+        PendingAttributes pending{*this, ray, std::nullopt};
+        const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
+        const LocatedHit located = accel_->intersect_located(ray, &observer);
+        if (!located.hit.is_hit()) return;
+        write_hit(rayhit, located.hit, converted_.instance_ids[located.hit.instance_id],
+                  pending.attributes, located.triangle.corners);
+        return;
+    }
+    // Our traversal finds the triangle and t; the reported attributes must be Embree's to the
+    // last bit. The SIMD kernels' Möller test computed Embree's own terms (the ray in Embree's
+    // object space: set_world_to_object), so Embree's reciprocal finishes them; they are
+    // computed again the way Embree computes them (its world-to-object map, its kernel's
+    // rounding) only where the query ran another test, or entered an instance placed by the
+    // identity with the world ray while a zero coordinate may differ in sign from Embree's.
+    const LocatedHit located = accel_->intersect_located(ray, nullptr);
     const Hit& hit = located.hit;
     if (!hit.is_hit()) return;
-    if (finishes_moller_terms_)
-        PendingAttributes::on_closer_hit(&pending, hit.instance_id, located.triangle);
     const glue::EmbreeHitIds& ids = converted_.instance_ids[hit.instance_id];
-    // The corners as the query copied them from the leaf it tested (the mesh's index and
-    // vertex arrays, or the object BVH's corner copy, would cost cache misses).
-    const TriangleVerts& triangle = located.triangle.corners;
-    const std::array<Vec3f, 3> corners = {triangle.v0, triangle.v1, triangle.v2};
-    const std::optional<glue::EmbreeHitAttributes>& embree_hit = pending.attributes;
-    float t = hit.t, u = hit.u, v = hit.v;
-    Vec3f normal;
-    if (embree_hit) {
-        normal = embree_hit->geometry_normal;
-        u = embree_hit->u;
-        v = embree_hit->v;
-        // Embree's t when it lies in the ray's interval (it does but for rounding at the
-        // interval's ends), so that t, u and v describe the same point.
-        if (embree_hit->t >= in.tnear && embree_hit->t <= in.tfar) t = embree_hit->t;
-    } else {
-        // Parallel in Embree's rounding (a grazing hit Embree would not report): our answer.
-        normal = cross(corners[2] - corners[0], corners[0] - corners[1]);
-    }
-    rayhit.ray.tfar = t;
-    rayhit.hit.Ng_x = normal.x;
-    rayhit.hit.Ng_y = normal.y;
-    rayhit.hit.Ng_z = normal.z;
-    rayhit.hit.u = u;
-    rayhit.hit.v = v;
-    rayhit.hit.primID = hit.prim_id;
-    rayhit.hit.geomID = ids.geom_id;
-    rayhit.hit.instID[0] = ids.inst_id;
+    const HitTriangle& triangle = located.triangle;
+    const bool keeps_terms =
+        triangle.has_moller_terms &&
+        !(ids.inst_id != RTC_INVALID_GEOMETRY_ID &&
+          accel_->instance_targets()[hit.instance_id].space == InstanceTarget::kWorldSpace &&
+          has_zero_coordinate(ray));
+    write_hit(rayhit, hit, ids,
+              keeps_terms
+                  ? glue::embree_hit_attributes_from_terms(triangle.moller_terms, arithmetic_)
+                  : recomputed_attributes(ray, hit.instance_id, triangle),
+              triangle.corners);
 }
 
 void EmbreeAccel::occluded1(RTCRay& in) const noexcept {

@@ -157,6 +157,10 @@ private:
     [[gnu::noinline]] void intersect_within_bounds(RTCRayHit& rayhit) const noexcept;
     /// Embree's attributes of each closer hit as the traversal finds it (embree_accel.cpp).
     struct PendingAttributes;
+    /// Embree's attributes of the hit of `ray` on `triangle` of `instance`, computed again
+    /// from the triangle's corners as Embree computes them.
+    std::optional<glue::EmbreeHitAttributes> recomputed_attributes(
+        const Ray& ray, InstanceId instance, const HitTriangle& triangle) const noexcept;
 
     RTCScene scene_ = nullptr;
     EmbreeAccelSettings settings_;
