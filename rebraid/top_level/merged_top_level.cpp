@@ -29,6 +29,15 @@ const TopLevelItem* mergeable_item(const TopLevelBvh& top, NodeRef leaf) {
     return item.object_node.is_inner() ? &item : nullptr;
 }
 
+/// The item a top-level leaf holds, when its object leaf can hang in the top-level node in
+/// its place: one item naming a whole object leaf (not part of one: rows are laid out per
+/// whole leaf).
+const TopLevelItem* hangable_item(const TopLevelBvh& top, NodeRef leaf) {
+    if (top.has_partial_leaves || !leaf.is_leaf() || leaf.prim_count() != 1) return nullptr;
+    const TopLevelItem& item = top.items[leaf.first_prim()];
+    return item.object_node.is_leaf() && item.object_node.prim_count() > 0 ? &item : nullptr;
+}
+
 /// Inner nodes of `bvh` in the subtree below `start`.
 std::uint32_t count_inner_nodes(const ObjectBvhView& bvh, NodeRef start) {
     std::uint32_t count = 0;
@@ -136,13 +145,33 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     const auto world_items = std::ranges::count_if(top.items, is_world_space);
     const bool merges_world_space =
         settings.world_space && 2 * std::size_t(world_items) >= top.items.size();
-    std::vector<MergedSlot> slots;
-    for (std::uint32_t n = 0; n < top.nodes.size(); ++n)
-        for (int slot = 0; slot < kBvhWidth; ++slot)
-            if (const TopLevelItem* item = mergeable_item(top, top.nodes[n].children[slot]))
-                if (is_world_space(*item) ? merges_world_space : settings.placed_instances)
-                    slots.push_back({n, slot, item});
-    if (slots.empty()) return merged;
+    const auto merges = [&](const TopLevelItem& item) {
+        return is_world_space(item) ? merges_world_space : settings.placed_instances;
+    };
+    // Items naming inner object nodes: their subtrees are copied. Items naming object leaves:
+    // the leaf itself hangs in the item's slot (no copy), tested with its node's other leaves
+    // as a flat BVH's are, instead of entered.
+    // The leaves hung in one node come from one instance (the first hangable slot's), so that
+    // the traversal finds all of a node's object leaves in one source.
+    std::vector<MergedSlot> slots, hung;
+    for (std::uint32_t n = 0; n < top.nodes.size(); ++n) {
+        const WideNode& node = top.nodes[n];
+        const float node_area = node.bounds().half_area();
+        InstanceId hung_instance = kInvalidId;
+        for (int slot = 0; slot < kBvhWidth; ++slot) {
+            const NodeRef child = node.children[slot];
+            if (const TopLevelItem* item = mergeable_item(top, child); item && merges(*item)) {
+                slots.push_back({n, slot, item});
+            } else if (const TopLevelItem* leaf_item = hangable_item(top, child);
+                       leaf_item && merges(*leaf_item) &&
+                       node.child_bounds(slot).half_area() <=
+                           MergedTopLevel::kHungLeafAreaShare * node_area) {
+                if (hung_instance == kInvalidId) hung_instance = leaf_item->instance_id;
+                if (leaf_item->instance_id == hung_instance) hung.push_back({n, slot, leaf_item});
+            }
+        }
+    }
+    if (slots.empty() && hung.empty()) return merged;
 
     const auto bvh_of = [&](const MergedSlot& slot) -> const ObjectBvhView& {
         return views[targets[slot.item->instance_id].mesh];
@@ -176,12 +205,22 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
                 world_slots.push_back(slots[i]);
                 world_first.push_back(first_node[i + 1]);
             }
-        if (world_slots.empty()) return merged;
+        if (world_slots.empty() && hung.empty()) return merged;
         slots = std::move(world_slots);
         first_node = std::move(world_first);
     }
+    // One source per hung leaf's instance, after the copied subtrees' (first use, in node and
+    // slot order).
+    std::vector<std::uint32_t> hung_source(targets.size(), kInvalidId);
+    std::vector<InstanceId> hung_instances;
+    for (const MergedSlot& slot : hung) {
+        std::uint32_t& source = hung_source[slot.item->instance_id];
+        if (source != kInvalidId) continue;
+        source = std::uint32_t(slots.size() + hung_instances.size());
+        hung_instances.push_back(slot.item->instance_id);
+    }
     // A source's index sits below the flag and the hint's line count in a hint word.
-    if (slots.size() > NodeRef::kMaxFirst) return merged;
+    if (slots.size() + hung_instances.size() > NodeRef::kMaxFirst) return merged;
     first_node[0] = std::uint32_t(top.nodes.size());
     std::uint64_t node_count = first_node[0];
     for (std::size_t i = 0; i < slots.size(); ++i) {
@@ -196,7 +235,7 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     reserve_on_huge_pages(merged.nodes, first_node.back());
     merged.nodes.assign(top.nodes.begin(), top.nodes.end());
     merged.nodes.resize(first_node.back());
-    merged.sources.resize(slots.size());
+    merged.sources.resize(slots.size() + hung_instances.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const MergedSlot& slot = slots[i];
@@ -211,6 +250,18 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
             merged.nodes[slot.node].children[slot.slot] = NodeRef::inner(first_node[i]);
         }
     });
+    for (std::size_t i = 0; i < hung_instances.size(); ++i) {
+        const InstanceTarget& target = targets[hung_instances[i]];
+        const ObjectBvhView& bvh = views[target.mesh];
+        merged.sources[slots.size() + i] = {bvh.leaf_rows,     bvh.triangles, bvh.prim_ids,
+                                            hung_instances[i], &target,       target.space};
+    }
+    for (const MergedSlot& slot : hung) {
+        WideNode& node = merged.nodes[slot.node];
+        node.children[slot.slot] = slot.item->object_node;
+        node.leaf_row_hints[slot.slot] =
+            MergedTopLevel::kSourceWordFlag | hung_source[slot.item->instance_id];
+    }
     for (const MergedLeafSource& source : merged.sources)
         merged.every_source_has_rows = merged.every_source_has_rows && source.leaf_rows != nullptr;
     merged.root = top.root;

@@ -53,28 +53,43 @@ struct TopLevelMergeSettings {
 /// subtree of a flat BVH would: the ray reaches those object nodes and leaves in the same loop
 /// and with the same stack as the top level's nodes, and entering no longer chains the item,
 /// its instance's record and its mesh's arrays before the first object node can be fetched.
-/// Items that name object leaves stay leaves of the top level, entered as before
-/// (traverse_bvh's LeafVisits::by_node visits the two kinds), as do items of placed instances
-/// unless TopLevelMergeSettings::placed_instances copies them too (world-space boxes over
-/// object-space triangles).
+/// An item that names an object leaf needs no copy: the leaf itself hangs in the item's slot
+/// (its hint word naming the leaf's source), tested with its node's other leaves as a flat
+/// BVH tests sibling leaves (traverse_bvh's LeafVisits::by_node, which visits items one by
+/// one), where its box is small beside its node's (kHungLeafAreaShare) and the node's other
+/// hung leaves are of the same instance; other such items stay items. Items of placed
+/// instances are merged only where TopLevelMergeSettings::placed_instances asks (world-space
+/// boxes over object-space triangles).
 ///
-/// The copy holds the top level's nodes (same numbers) followed by each merged subtree's
-/// nodes; a copied object node keeps its leaf references, which still name triangles in its
-/// mesh's leaf order, and its subtree's source says where those are. The top level itself
+/// The copy holds the top level's nodes (same numbers, hung leaves in place of their items)
+/// followed by each merged subtree's nodes; a copied object node keeps its leaf references,
+/// which still name triangles in its mesh's leaf order, and its subtree's source says where
+/// those are. The top level itself
 /// (TopLevelBvh) is unchanged: statistics and structure hashes read it.
 struct MergedTopLevel {
-    /// The top bit of a copied node's hint word that names the node's source (its index in
-    /// `sources` below the bit) instead of a child's rows. Every leaf or empty slot's word
-    /// names it, and a node of eight inner children gives up the hint of the child whose
-    /// rows span the fewest lines for it, so that every copied node names its source.
+    /// The top bit of a hint word that names a source (its index in `sources` below the
+    /// bit) instead of a child's rows. In a copied node every leaf or empty slot's word names
+    /// the node's source, and a node of eight inner children gives up the hint of the child
+    /// whose rows span the fewest lines for it, so that every copied node names its source;
+    /// in a top-level node, the words of the slots where object leaves hang name theirs.
     static constexpr std::uint32_t kSourceWordFlag = 0x80000000u;
+    /// An item naming an object leaf hangs that leaf in its slot only where the item's box
+    /// takes at most this share of its node's area (half the surface). A hung leaf is tested
+    /// at its node, before the ray goes on to the node's inner children, where an item waits
+    /// on the stack behind nearer ones and is skipped when a nearer hit ends the ray first: a
+    /// leaf that spans its node is entered by nearly every ray through it, mostly behind a
+    /// nearer hit. The drop-in grid's ground plane (2 triangles under the whole scene, 0.94 of
+    /// its node's area), hung, cost the grid's camera rays 7 % (docs/design.md, "Object
+    /// leaves hung in the top level").
+    static constexpr float kHungLeafAreaShare = 0.75f;
 
     std::vector<WideNode> nodes;
     /// Nodes from this id on are copied object nodes; below it, the top level's own, whose
     /// leaves are top-level items.
     std::uint32_t first_object_node = 0;
     /// Per merged subtree, in the order the copy holds them (the top level's node and slot
-    /// order): where its leaves' triangles are and in which space.
+    /// order), then per instance whose leaves hang in the top level (in the order of its
+    /// first hung leaf): where the leaves' triangles are and in which space.
     std::vector<MergedLeafSource> sources;
     /// Every source has pre-arranged rows: the SIMD kernels read rows only (one loop).
     bool every_source_has_rows = true;
@@ -106,18 +121,21 @@ struct MergedTopLevel {
     }
 };
 
-/// The merge of `top`'s items that name inner object nodes (views[targets[instance].mesh]
-/// their BVH; only top-level leaves of one item, the top builders' leaves), as `settings`
-/// choose: world-space items (InstanceTarget::kWorldSpace) when at least half of the top's
-/// items are world-space items (naming inner nodes or leaves), items of placed instances
-/// (placed by `object_to_world`, per instance) when their copies hold at most
-/// placed_node_budget times `object_nodes` (the inner nodes of the scene's object BVHs) nodes. An
-/// empty MergedTopLevel when nothing is merged, for a top level whose root is a leaf, and where the
-/// copy would hold more nodes than a NodeRef can name. The merged traversal costs every node a
-/// little more (the choice of leaf visit, the source of each object leaf), which the entries saved
-/// repay where most items need no ray of their own; where most entered placed instances, it did not
-/// (docs/design.md, "World-space items merged into the top level"). Deterministic: subtrees are
-/// placed in the top level's node and slot order, whatever the thread count.
+/// The merge of `top`'s items (views[targets[instance].mesh] their BVH; only top-level leaves
+/// of one item, the top builders' leaves) that name inner object nodes (their subtrees copied)
+/// or object leaves (hung in place, where MergedTopLevel::kHungLeafAreaShare allows; not
+/// where opening split leaves, TopLevelBvh::has_partial_leaves, since rows are laid out per
+/// whole leaf), as `settings` choose: world-space items (InstanceTarget::kWorldSpace) when at
+/// least half of the top's items are world-space items, items of placed instances (placed by
+/// `object_to_world`, per instance) when their copies hold at most placed_node_budget times
+/// `object_nodes` (the inner nodes of the scene's object BVHs) nodes (a hung leaf copies
+/// none). An empty MergedTopLevel when nothing is merged, for a top level whose root is a
+/// leaf, and where the copy would hold more nodes than a NodeRef can name. The merged
+/// traversal costs every node a little more (the choice of leaf visit, the source of each
+/// object leaf), which the entries saved repay where most items need no ray of their own;
+/// where most entered placed instances, it did not (docs/design.md, "World-space items merged
+/// into the top level"). Deterministic: subtrees and sources are placed in the top level's
+/// node and slot order, whatever the thread count.
 MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
                                      std::span<const InstanceTarget> targets,
                                      std::span<const ObjectBvhView> views,

@@ -333,8 +333,8 @@ struct ItemEntries {
     }
 };
 
-/// The slots of copied node `node` whose hint words name its source
-/// (MergedTopLevel::kSourceWordFlag): never none.
+/// The slots of `node` whose hint words name a source (MergedTopLevel::kSourceWordFlag): in a
+/// copied object node never none; in a top-level node, its hung object leaves.
 inline unsigned source_word_slots(const WideNode& node) {
 #ifdef REBRAID_SIMD_AVX2
     // The flag is each word's top bit, i.e. the sign bit of the 8 lanes.
@@ -413,17 +413,51 @@ template <TriangleTest kTest>
         [&](NodeRef leaf) { return entries.occluded<kTest>(leaf, object_rays); });
 }
 
-/// The leaf visitor of a merged top level (traverse_bvh's LeafVisits::by_node): the leaf
-/// children of copied object nodes go to `object_leaves(source, refs, slots)` together,
-/// top-level items one by one to `items(leaf)`.
+/// The leaf slots of `node` whose hint words name a source: the object leaves of a merged top
+/// level's node (leaf_slots and source_word_slots at once: both flags are their words' top
+/// bits).
+inline unsigned object_leaf_slots(const WideNode& node) {
+#ifdef REBRAID_SIMD_AVX2
+    static_assert(NodeRef::kLeafBit == MergedTopLevel::kSourceWordFlag);
+    const auto words = [](const auto& array) {
+        return _mm256_loadu_ps(reinterpret_cast<const float*>(array));
+    };
+    return unsigned(
+        _mm256_movemask_ps(_mm256_and_ps(words(node.children), words(node.leaf_row_hints))));
+#else
+    return leaf_slots(node) & source_word_slots(node);
+#endif
+}
+
+/// The slots of `node` whose hint words equal `word`.
+inline unsigned slots_with_word(const WideNode& node, std::uint32_t word) {
+#ifdef REBRAID_SIMD_AVX2
+    const __m256i words = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(node.leaf_row_hints));
+    return unsigned(_mm256_movemask_ps(
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(words, _mm256_set1_epi32(int(word))))));
+#else
+    unsigned slots = 0;
+    for (int i = 0; i < kBvhWidth; ++i) slots |= unsigned(node.leaf_row_hints[i] == word) << i;
+    return slots;
+#endif
+}
+
+/// The leaf visitor of a merged top level (traverse_bvh's LeafVisits::by_node): object
+/// leaves (every leaf child of a copied object node, and the leaves hung in the top level's
+/// own nodes, whose hint words name their sources) go to `object_leaves(source, refs, slots)`
+/// together, a run per source, top-level items one by one to `items(leaf)`.
 template <class ObjectLeaves, class Items>
 struct MergedLeafVisitor {
     const MergedTopLevel& merged;
     ObjectLeaves object_leaves;
     Items items;
 
-    bool takes_siblings(std::uint32_t node_id) const { return merged.is_object_node(node_id); }
-    bool operator()(const WideNode& node, unsigned slots) {
+    unsigned sibling_leaf_slots(std::uint32_t, const WideNode& node) const {
+        // Every leaf slot of a copied object node names its source; a top-level node's leaf
+        // slots name one where an object leaf hangs there, none where an item is.
+        return object_leaf_slots(node);
+    }
+    bool operator()(std::uint32_t, const WideNode& node, unsigned slots) {
         return object_leaves(merged.source_of_leaves(node, slots), node.children, slots);
     }
     bool operator()(NodeRef leaf) { return items(leaf); }

@@ -27,8 +27,49 @@
 namespace rebraid {
 namespace {
 
-Scene world_space_scene() {
-    return bake_instances_into_world_space(test::make_overlap_scene(24, 5));
+/// Index of the ground quad with_small_meshes adds (its only instance's id too).
+constexpr std::uint32_t kNoGround = ~0u;
+
+/// `scene` with `count` meshes of four small triangles each (each object BVH one leaf, so
+/// their items name leaves) scattered through its bounds, placed by the identity or, with
+/// `placed`, by random transforms; and, unless placed, a ground quad under everything (a leaf
+/// that spans its top-level node). Returns the ground's instance id in `ground`.
+Scene with_small_meshes(Scene scene, std::uint32_t count, bool placed, std::uint32_t* ground) {
+    const BBox3f bounds = scene.bounds();
+    Random random(17);
+    for (std::uint32_t i = 0; i < count; ++i) {
+        Mesh mesh = test::make_triangle_soup(4, 100 + i, 0.1f);
+        AffineTransform place = test::random_transform(random, 2.0f, true);
+        if (!placed) {
+            const Vec3f at{random.next_float(bounds.min.x, bounds.max.x),
+                           random.next_float(bounds.min.y, bounds.max.y),
+                           random.next_float(bounds.min.z, bounds.max.z)};
+            for (Vec3f& position : mesh.positions) position = position + at;
+            place = AffineTransform::identity();
+        }
+        scene.meshes.push_back(std::move(mesh));
+        scene.instances.push_back({MeshId(scene.meshes.size() - 1), place});
+    }
+    if (ground != nullptr) *ground = kNoGround;
+    if (placed) return scene;
+    // Ten times as wide as the rest, so that it takes most of its node's area.
+    Mesh quad;
+    const float y = bounds.min.y - 0.01f;
+    const Vec3f centre = bounds.center(), reach = (bounds.max - bounds.min) * 5.0f;
+    quad.positions = {{centre.x - reach.x, y, centre.z - reach.z},
+                      {centre.x + reach.x, y, centre.z - reach.z},
+                      {centre.x + reach.x, y, centre.z + reach.z},
+                      {centre.x - reach.x, y, centre.z + reach.z}};
+    quad.triangles = {{0, 1, 2}, {0, 2, 3}};
+    scene.meshes.push_back(std::move(quad));
+    scene.instances.push_back({MeshId(scene.meshes.size() - 1), AffineTransform::identity()});
+    if (ground != nullptr) *ground = std::uint32_t(scene.instances.size() - 1);
+    return scene;
+}
+
+Scene world_space_scene(std::uint32_t* ground = nullptr) {
+    return with_small_meshes(bake_instances_into_world_space(test::make_overlap_scene(24, 5)), 40,
+                             false, ground);
 }
 
 InstancedAccel rebraided(const Scene& scene, bool merge, bool merge_placed = false,
@@ -42,7 +83,7 @@ InstancedAccel rebraided(const Scene& scene, bool merge, bool merge_placed = fal
 
 /// Placed instances, overlapping: their items are merged only with merge_placed_instances.
 Scene placed_scene() {
-    return test::make_overlap_scene(24, 5);
+    return with_small_meshes(test::make_overlap_scene(24, 5), 40, true, nullptr);
 }
 
 /// Whether some merged subtree is of a placed instance (its triangles in object space).
@@ -115,8 +156,39 @@ void expect_same_subtree(const MergedTopLevel& merged, const ObjectBvhView& bvh,
     }
 }
 
-TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeWhereTheItemWas) {
-    const Scene scene = world_space_scene();
+/// Checks the leaf hung in slot `slot` of the merged top level's node `node` for `item` (of an
+/// instance whose object BVH is `bvh`): the object leaf itself, its hint word naming its
+/// instance's source (`source_of`, indexed by instance: one source per instance), the leaves
+/// hung in one node all of one instance (`node_instance`), and the leaf's box a small share of
+/// its node's. Returns the source.
+std::uint32_t expect_hung_leaf(const MergedTopLevel& merged, const WideNode& top_node,
+                               std::uint32_t node, int slot, const TopLevelItem& item,
+                               const ObjectBvhView& bvh, std::vector<std::uint32_t>& source_of,
+                               InstanceId& node_instance) {
+    const WideNode& copy = merged.nodes[node];
+    EXPECT_EQ(copy.children[slot], item.object_node);
+    EXPECT_TRUE(item.object_node.is_leaf());
+    const std::uint32_t source = copy.leaf_row_hints[slot] & ~MergedTopLevel::kSourceWordFlag;
+    EXPECT_LT(source, merged.sources.size());
+    if (source >= merged.sources.size()) return source;
+    EXPECT_EQ(&merged.source_of_leaves(copy, 1u << slot), &merged.sources[source]);
+    EXPECT_EQ(merged.sources[source].instance, item.instance_id);
+    EXPECT_EQ(merged.sources[source].leaf_rows, bvh.leaf_rows);
+    EXPECT_EQ(merged.sources[source].triangles, bvh.triangles);
+    EXPECT_EQ(merged.sources[source].prim_ids, bvh.prim_ids);
+    if (source_of[item.instance_id] == kInvalidId) source_of[item.instance_id] = source;
+    EXPECT_EQ(source_of[item.instance_id], source);
+    if (node_instance == kInvalidId) node_instance = item.instance_id;
+    EXPECT_EQ(node_instance, item.instance_id) << "leaves of two instances hang in one node";
+    EXPECT_LE(top_node.child_bounds(slot).half_area(),
+              MergedTopLevel::kHungLeafAreaShare * top_node.bounds().half_area());
+    return source;
+}
+
+TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeOrLeafWhereTheItemWas) {
+    std::uint32_t ground = kNoGround;
+    const Scene scene = world_space_scene(&ground);
+    ASSERT_NE(ground, kNoGround);
     const InstancedAccel accel = rebraided(scene, true);
     const TopLevelBvh& top = accel.top_level();
     const MergedTopLevel& merged = accel.merged_top_level();
@@ -124,27 +196,46 @@ TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeWhereTheItemWas) {
     EXPECT_EQ(merged.root, top.root);
     ASSERT_EQ(merged.first_object_node, top.nodes.size());
     std::vector<int> reached(merged.nodes.size(), 0);
-    std::size_t merged_items = 0, kept_items = 0;
+    std::vector<std::uint32_t> hung_source_of(scene.instances.size(), kInvalidId);
+    std::size_t merged_items = 0, hung_leaves = 0, kept_items = 0;
+    bool ground_kept = false;
     for (std::uint32_t n = 0; n < top.nodes.size(); ++n) {
+        InstanceId node_instance = kInvalidId;
         for (int slot = 0; slot < kBvhWidth; ++slot) {
             const NodeRef child = top.nodes[n].children[slot];
             const NodeRef copy = merged.nodes[n].children[slot];
+            const bool is_hung =
+                (merged.nodes[n].leaf_row_hints[slot] & MergedTopLevel::kSourceWordFlag) != 0;
             EXPECT_TRUE(same_child_box(top.nodes[n], merged.nodes[n], slot));
-            if (!child.is_leaf() || copy == child) {
+            if (!child.is_leaf() || (copy == child && !is_hung)) {
                 EXPECT_EQ(copy, child);
-                if (child.is_leaf()) ++kept_items;
+                EXPECT_EQ(merged.nodes[n].leaf_row_hints[slot], top.nodes[n].leaf_row_hints[slot]);
+                if (child.is_leaf()) {
+                    ++kept_items;
+                    ground_kept =
+                        ground_kept || top.items[child.first_prim()].instance_id == ground;
+                }
                 continue;
             }
-            // A merged slot: a world-space item naming an inner object node.
             ASSERT_EQ(child.prim_count(), 1u);
             const TopLevelItem& item = top.items[child.first_prim()];
             const InstanceTarget& target = accel.instance_targets()[item.instance_id];
             EXPECT_EQ(target.space, InstanceTarget::kWorldSpace);
+            const ObjectBvhView& bvh = accel.object_views()[target.mesh];
+            if (is_hung) {
+                // A world-space item naming an object leaf: the leaf hangs in its place, its
+                // source after every copied subtree's.
+                EXPECT_GE(expect_hung_leaf(merged, top.nodes[n], n, slot, item, bvh, hung_source_of,
+                                           node_instance),
+                          merged_items);
+                ++hung_leaves;
+                continue;
+            }
+            // A world-space item naming an inner object node: its subtree copied.
             ASSERT_TRUE(item.object_node.is_inner());
             // Sources follow the merged slots in the top level's node and slot order.
             const std::uint32_t source = std::uint32_t(merged_items);
             ASSERT_LT(source, merged.sources.size());
-            const ObjectBvhView& bvh = accel.object_views()[target.mesh];
             EXPECT_EQ(merged.sources[source].instance, item.instance_id);
             EXPECT_EQ(merged.sources[source].leaf_rows, bvh.leaf_rows);
             EXPECT_EQ(merged.sources[source].triangles, bvh.triangles);
@@ -153,8 +244,15 @@ TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeWhereTheItemWas) {
             ++merged_items;
         }
     }
-    EXPECT_EQ(merged_items, merged.sources.size());
-    EXPECT_EQ(merged_items + kept_items, top.items.size());
+    EXPECT_GT(hung_leaves, 0u);
+    EXPECT_GT(merged_items, 0u);
+    const auto hung_instances =
+        std::size_t(std::ranges::count_if(hung_source_of, [](auto s) { return s != kInvalidId; }));
+    EXPECT_EQ(merged_items + hung_instances, merged.sources.size());
+    EXPECT_EQ(merged_items + hung_leaves + kept_items, top.items.size());
+    // The ground quad spans the nodes above it: a leaf that nearly every ray through its node
+    // enters stays an item (MergedTopLevel::kHungLeafAreaShare).
+    EXPECT_TRUE(ground_kept);
     // Every copied node below exactly one merged slot, the top level's own below none.
     for (std::size_t id = 0; id < reached.size(); ++id)
         EXPECT_EQ(reached[id], merged.is_object_node(std::uint32_t(id)) ? 1 : 0) << id;
@@ -226,16 +324,29 @@ TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
     ASSERT_FALSE(merged.empty());
     EXPECT_TRUE(has_placed_source(merged));
     std::vector<int> reached(merged.nodes.size(), 0);
-    std::size_t merged_items = 0;
+    std::size_t merged_items = 0, hung_leaves = 0;
     for (std::uint32_t n = 0; n < top.nodes.size(); ++n)
         for (int slot = 0; slot < kBvhWidth; ++slot) {
             const NodeRef child = top.nodes[n].children[slot];
             const NodeRef copy = merged.nodes[n].children[slot];
             EXPECT_TRUE(same_child_box(top.nodes[n], merged.nodes[n], slot));
-            if (!child.is_leaf() || copy == child) continue;
+            const bool is_hung =
+                (merged.nodes[n].leaf_row_hints[slot] & MergedTopLevel::kSourceWordFlag) != 0;
+            if (!child.is_leaf() || (copy == child && !is_hung)) continue;
             const TopLevelItem& item = top.items[child.first_prim()];
             const InstanceTarget& target = accel.instance_targets()[item.instance_id];
             EXPECT_NE(target.space, InstanceTarget::kWorldSpace);
+            if (is_hung) {
+                // A placed item naming an object leaf hangs in its slot: its box stays the
+                // item's (world space), its triangles in object space.
+                EXPECT_EQ(copy, item.object_node);
+                const MergedLeafSource& source =
+                    merged.source_of_leaves(merged.nodes[n], 1u << slot);
+                EXPECT_EQ(source.instance, item.instance_id);
+                EXPECT_EQ(source.space, target.space);
+                ++hung_leaves;
+                continue;
+            }
             ASSERT_LT(merged_items, merged.sources.size());
             const MergedLeafSource& source = merged.sources[merged_items];
             EXPECT_EQ(source.instance, item.instance_id);
@@ -247,15 +358,21 @@ TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
                                        reached);
             ++merged_items;
         }
-    EXPECT_EQ(merged_items, merged.sources.size());
+    EXPECT_GT(hung_leaves, 0u);
+    EXPECT_LE(merged_items, merged.sources.size());
     for (std::size_t id = 0; id < reached.size(); ++id)
         EXPECT_EQ(reached[id], merged.is_object_node(std::uint32_t(id)) ? 1 : 0) << id;
 }
 
+// The budget bounds the copied nodes; hung leaves copy none, so they hang whatever it is.
 TEST(MergedTopLevel, MergesPlacedItemsOnlyWhenAskedAndWithinTheirBudget) {
     EXPECT_TRUE(rebraided(placed_scene(), true, false).merged_top_level().empty());
-    EXPECT_TRUE(rebraided(placed_scene(), true, true, 0.0f).merged_top_level().empty());
-    EXPECT_FALSE(rebraided(placed_scene(), true, true, 100.0f).merged_top_level().empty());
+    const InstancedAccel none_copied = rebraided(placed_scene(), true, true, 0.0f);
+    const MergedTopLevel& leaves_only = none_copied.merged_top_level();
+    ASSERT_FALSE(leaves_only.empty());
+    EXPECT_EQ(leaves_only.nodes.size(), leaves_only.first_object_node);
+    EXPECT_GT(rebraided(placed_scene(), true, true, 100.0f).merged_top_level().nodes.size(),
+              leaves_only.first_object_node);
 }
 
 // Copied nodes ask for their children's rows where the structure's rows outgrow the caches,
