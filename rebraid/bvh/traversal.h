@@ -38,9 +38,9 @@ enum class LeafVisits {
     /// of a few triangles: the visitor tests them in one go, without a stack entry each, and
     /// the hits found shorten the ray before any inner sibling is entered.
     with_siblings,
-    /// Per slot, as the visitor says: at an inner node `id`, the leaf children in
-    /// visit_leaf.sibling_leaf_slots(id, node) that the ray enters are handed over together
-    /// (visit_leaf(id, node, slots), node the WideNode), as with_siblings does, and the other
+    /// Per slot, as the visitor says: at an inner node, the leaf children in
+    /// visit_leaf.sibling_leaf_slots(node) that the ray enters are handed over together
+    /// (visit_leaf(node, slots), node the WideNode), as with_siblings does, and the other
     /// leaves are stacked and visited one by one (visit_leaf(NodeRef leaf)). For a tree that
     /// holds both kinds of leaves (a top level with object nodes and leaves merged in:
     /// merged_top_level.h). The start must be an inner node.
@@ -124,13 +124,13 @@ bool traverse_bvh(const WideNode* nodes, NodeRef start, PreparedRay& prepared,
             if constexpr (kWithSiblings || kByNode) {
                 unsigned leaf_mask;
                 if constexpr (kByNode)
-                    leaf_mask = mask & visit_leaf.sibling_leaf_slots(node_id, node);
+                    leaf_mask = mask & visit_leaf.sibling_leaf_slots(node);
                 else
                     leaf_mask = mask & leaf_slots(node);
                 if (leaf_mask != 0) {
                     bool stop;
                     if constexpr (kByNode)
-                        stop = visit_leaf(node_id, node, leaf_mask);
+                        stop = visit_leaf(node, leaf_mask);
                     else
                         stop = visit_leaf(node.children, leaf_mask);
                     if (stop) return true;

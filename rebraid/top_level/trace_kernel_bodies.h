@@ -429,35 +429,18 @@ inline unsigned object_leaf_slots(const WideNode& node) {
 #endif
 }
 
-/// The slots of `node` whose hint words equal `word`.
-inline unsigned slots_with_word(const WideNode& node, std::uint32_t word) {
-#ifdef REBRAID_SIMD_AVX2
-    const __m256i words = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(node.leaf_row_hints));
-    return unsigned(_mm256_movemask_ps(
-        _mm256_castsi256_ps(_mm256_cmpeq_epi32(words, _mm256_set1_epi32(int(word))))));
-#else
-    unsigned slots = 0;
-    for (int i = 0; i < kBvhWidth; ++i) slots |= unsigned(node.leaf_row_hints[i] == word) << i;
-    return slots;
-#endif
-}
-
 /// The leaf visitor of a merged top level (traverse_bvh's LeafVisits::by_node): object
-/// leaves (every leaf child of a copied object node, and the leaves hung in the top level's
-/// own nodes, whose hint words name their sources) go to `object_leaves(source, refs, slots)`
-/// together, a run per source, top-level items one by one to `items(leaf)`.
+/// leaves (every leaf child of a copied object node, and the leaves hung in a top-level node,
+/// all of one source per node) go to `object_leaves(source, refs, slots)` together, top-level
+/// items one by one to `items(leaf)`.
 template <class ObjectLeaves, class Items>
 struct MergedLeafVisitor {
     const MergedTopLevel& merged;
     ObjectLeaves object_leaves;
     Items items;
 
-    unsigned sibling_leaf_slots(std::uint32_t, const WideNode& node) const {
-        // Every leaf slot of a copied object node names its source; a top-level node's leaf
-        // slots name one where an object leaf hangs there, none where an item is.
-        return object_leaf_slots(node);
-    }
-    bool operator()(std::uint32_t, const WideNode& node, unsigned slots) {
+    unsigned sibling_leaf_slots(const WideNode& node) const { return object_leaf_slots(node); }
+    bool operator()(const WideNode& node, unsigned slots) {
         return object_leaves(merged.source_of_leaves(node, slots), node.children, slots);
     }
     bool operator()(NodeRef leaf) { return items(leaf); }
