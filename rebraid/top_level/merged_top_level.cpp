@@ -138,7 +138,7 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     // Merged where most items are in world space: the merged loop costs every node a little
     // more (the choice of leaf visit, each object leaf's source), which the entries saved
     // repay unless most items still enter placed instances. Counting the world-space items
-    // that name object leaves too (entered either way) merged brainstem and cg57_cruiser,
+    // that name object leaves too (then entered, since hung) merged brainstem and cg57_cruiser,
     // whose meshes placed once are built in world space (meshes_in_world_space):
     // 0.95 -> 1.03 and 0.92 -> 1.01 of Embree flat's speed on diffuse rays (docs/design.md,
     // "World-space items merged into the top level").
