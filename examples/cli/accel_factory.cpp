@@ -242,6 +242,7 @@ const std::vector<VariantKey>& variant_keys() {
          named_choice(&Settings::merge_placed_instances,
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"merge-placed-budget", real_number(&Settings::merge_placed_node_budget)},
+        {"items-out-of-line", real_number(&Settings::merge_items_out_of_line_area_share)},
         {"top-collapse",
          {[](const VariantValue& value, AccelOptions& options) {
               options.rebraid.build.collapse =

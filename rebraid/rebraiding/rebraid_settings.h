@@ -206,6 +206,10 @@ struct RebraidSettings {
     /// pay where meshes placed once are built in world space (docs/design.md).
     bool merge_placed_instances = false;
     float merge_placed_node_budget = 1.0f;
+    /// Where the items left in the merged tree have boxes whose areas add up to at most this
+    /// share of the root's, queries enter them out of line
+    /// (TopLevelMergeSettings::items_out_of_line_area_share).
+    float merge_items_out_of_line_area_share = 0.5f;
     /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
     /// cover at least this fraction of its box (estimated on a grid over the segment).
     float overlap_threshold = 0.25f;
@@ -225,7 +229,8 @@ struct RebraidSettings {
     TopLevelMergeSettings merge_settings() const {
         return {.world_space = merge_world_space,
                 .placed_instances = merge_placed_instances,
-                .placed_node_budget = merge_placed_node_budget};
+                .placed_node_budget = merge_placed_node_budget,
+                .items_out_of_line_area_share = merge_items_out_of_line_area_share};
     }
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.

@@ -153,6 +153,10 @@ void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
         intersect_ = kernels.sole_item_intersect;
         occluded_ = kernels.sole_item_occluded;
         intersect_located_ = kernels.sole_item_intersect_located;
+    } else if (!merged_.empty() && merged_.enters_items_out_of_line) {
+        intersect_ = kernels.merged_rare_items_intersect;
+        occluded_ = kernels.merged_rare_items_occluded;
+        intersect_located_ = kernels.merged_rare_items_intersect_located;
     } else if (!merged_.empty()) {
         intersect_ = kernels.merged_intersect;
         occluded_ = kernels.merged_occluded;

@@ -44,6 +44,16 @@ struct TopLevelMergeSettings {
     /// inner node of the scene's object BVHs (an instance's copy is its own: a mesh placed
     /// many times is copied as often).
     float placed_node_budget = 1.0f;
+    /// The queries enter the items left in the tree out of line where their boxes' areas add
+    /// up to at most this share of the root box's (the entries expected of a ray that crosses
+    /// the scene; infinity: always, 0: only where no item is left), and in the traversal's
+    /// loop elsewhere. Out of line, the loop keeps the world ray in registers and pays for
+    /// each entry a call, a ray prepared again and its own registers saved:
+    /// bench/tools/kernel_ab.py, out of line over in the loop (docs/design.md, "The rare parts
+    /// of a merged query out of line"), primary / diffuse rays, brainstem (area share 0.11)
+    /// 1.03 / 1.03, cg57_cruiser (0.25) 1.04 / 1.02, fzk_haus (1.58; 0.73 entries per diffuse
+    /// ray) 0.94 / 0.96.
+    float items_out_of_line_area_share = 0.5f;
 };
 
 /// A top level with the object nodes of its items copied in: one tree that a ray
@@ -93,6 +103,10 @@ struct MergedTopLevel {
     std::vector<MergedLeafSource> sources;
     /// Every source has pre-arranged rows: the SIMD kernels read rows only (one loop).
     bool every_source_has_rows = true;
+    /// The top-level items the merge left in the tree are few enough that queries enter them
+    /// out of line (TopLevelMergeSettings::items_out_of_line_area_share;
+    /// TraceKernels::merged_rare_items_intersect).
+    bool enters_items_out_of_line = false;
     /// Copied nodes from this id on ask for the leaf rows of the inner children the traversal
     /// descends into (their hint words, in their source's rows), as an object BVH's
     /// traversal does (LeafRowsPrefetch): from first_object_node where the structure's rows

@@ -476,9 +476,138 @@ auto with_merged_lanes([[maybe_unused]] const MergedTopLevel& merged, Query&& qu
     return query.template operator()<LeafTriangleLanes>();
 }
 
+/// Tests the object leaves `slots` of `refs`, of merged `source`, with `ray` (the world ray, or
+/// the ray mapped into the source's space) for a closest hit: a closer hit shortens `tfar` and
+/// sets `hit` (its instance, and its primID, or with `hit_prim_ids` the leaf-order position
+/// those turn into a primID when the query ends); `located` and `observer` as for
+/// instanced_closest_hit.
+template <TriangleTest kTest, class Lanes>
+void closest_in_merged_leaves(const MergedLeafSource& source, const NodeRef* refs, unsigned slots,
+                              const TriangleGroupRay& ray, float tnear, float& tfar, Hit& hit,
+                              const PrimId*& hit_prim_ids, TraversalCounters* counters,
+                              HitTriangle* located, const CloserHitObserver* observer) {
+    Lanes lanes = source_lanes<Lanes>(source);
+    const auto test_lanes = [&] {
+        TriangleGroupHit group_hit;
+        if (lanes.template intersect<kTest>(
+                ray, tnear, tfar, group_hit,
+                located != nullptr ? &located->moller_terms : nullptr)) {
+            tfar = group_hit.t;
+            hit.t = group_hit.t;
+            hit.u = group_hit.u;
+            hit.v = group_hit.v;
+            const std::uint32_t position = lanes.position(group_hit.index);
+            hit.instance_id = source.instance;
+            if (const std::optional<PrimId> id = row_prim_id(lanes, group_hit.index)) {
+                hit.prim_id = *id;
+                hit_prim_ids = nullptr;
+            } else {
+                hit.prim_id = position;
+                hit_prim_ids = source.prim_ids;
+                __builtin_prefetch(source.prim_ids + position);
+            }
+            if (located != nullptr) {
+                located->leaf_position = position;
+                located->corners = lanes.corners(group_hit.index);
+                located->has_moller_terms = moller_terms_computed<kTest>();
+                closer_hit_notifier(observer, source.instance)(*located);
+            }
+        }
+    };
+    test_each_leaf(lanes, refs, slots, counters, test_lanes, [] { return false; });
+}
+
+/// Whether the ray hits a triangle among the object leaves `slots` of `refs`, of merged
+/// `source`, tested with `ray` (the world ray, or the ray mapped into the source's space).
+template <TriangleTest kTest, class Lanes>
+bool occluded_in_merged_leaves(const MergedLeafSource& source, const NodeRef* refs, unsigned slots,
+                               const TriangleGroupRay& ray, float tnear, float tfar) {
+    Lanes lanes = source_lanes<Lanes>(source);
+    bool is_occluded = false;
+    const auto test_lanes = [&] {
+        is_occluded = is_occluded || lanes.template occluded<kTest>(ray, tnear, tfar);
+    };
+    test_each_leaf(lanes, refs, slots, nullptr, test_lanes, [&] { return is_occluded; });
+    return is_occluded;
+}
+
+/// What a merged query's out-of-line part found (closest_in_placed_leaves,
+/// closest_in_items): whether a closer hit, and then the hit, and the leaf-order ids its
+/// primID is to be read from when the query ends (null: the hit names its primID).
+struct OutOfLineHit {
+    bool found = false;
+    Hit hit;
+    const PrimId* hit_prim_ids = nullptr;
+};
+
+// The parts of a merged query that most rays never reach, or reach seldom, are out of line
+// (noinline), and take and give values only: the leaves of placed instances, with the world
+// ray mapped into their space there, and the top-level items left to enter, each call with a
+// world ray and ray cache of its own. The traversal's loop then keeps the world ray's values
+// in registers and tests world-space leaves with them, where a mapped ray chosen per leaf run
+// inside the loop, and the items' code beside it, had the compiler keep them in memory
+// (docs/design.md, "The rare parts of a merged query out of line").
+
+/// closest_in_merged_leaves for the leaves of a placed instance's source, with the world ray
+/// (`org`, `dir`) mapped into the source's space here.
+template <TriangleTest kTest, class Lanes>
+[[gnu::noinline, gnu::flatten]] OutOfLineHit closest_in_placed_leaves(
+    const MergedLeafSource& source, const NodeRef* refs, unsigned slots, Vec3f org, Vec3f dir,
+    float tnear, float tfar, TraversalCounters* counters, HitTriangle* located,
+    const CloserHitObserver* observer) {
+    Vec3f object_org, object_dir;
+    map_into_object_space(source.target->to_object, org, dir, object_org, object_dir);
+    OutOfLineHit result;
+    const float ray_end = tfar;
+    closest_in_merged_leaves<kTest, Lanes>(
+        source, refs, slots, TriangleGroupRay(object_org, object_dir), tnear, tfar, result.hit,
+        result.hit_prim_ids, counters, located, observer);
+    result.found = tfar < ray_end;
+    return result;
+}
+
+/// occluded_in_merged_leaves for the leaves of a placed instance's source.
+template <TriangleTest kTest, class Lanes>
+[[gnu::noinline, gnu::flatten]] bool occluded_in_placed_leaves(const MergedLeafSource& source,
+                                                               const NodeRef* refs, unsigned slots,
+                                                               Vec3f org, Vec3f dir, float tnear,
+                                                               float tfar) {
+    Vec3f object_org, object_dir;
+    map_into_object_space(source.target->to_object, org, dir, object_org, object_dir);
+    return occluded_in_merged_leaves<kTest, Lanes>(
+        source, refs, slots, TriangleGroupRay(object_org, object_dir), tnear, tfar);
+}
+
+/// Enters the items of top-level leaf `leaf` for the world ray `ray` (its reciprocals
+/// `reciprocals`) ending at `tfar`, as instanced_closest_hit does.
+template <TriangleTest kTest>
+[[gnu::noinline, gnu::flatten]] OutOfLineHit closest_in_items(
+    const ItemEntries& entries, NodeRef leaf, const Ray& ray,
+    const DirectionReciprocals& reciprocals, float tfar, TraversalCounters* counters,
+    HitTriangle* located, const CloserHitObserver* observer) {
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, tfar, reciprocals);
+    ObjectRayCache object_rays(world_ray);
+    OutOfLineHit result;
+    result.found = entries.closest<kTest>(leaf, object_rays, world_ray, result.hit, counters,
+                                          located, observer);
+    return result;
+}
+
+/// Whether the world ray `ray` hits anything among the items of top-level leaf `leaf`.
+template <TriangleTest kTest>
+[[gnu::noinline, gnu::flatten]] bool occluded_in_items(const ItemEntries& entries, NodeRef leaf,
+                                                       const Ray& ray,
+                                                       const DirectionReciprocals& reciprocals) {
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+    ObjectRayCache object_rays(world_ray);
+    return entries.occluded<kTest>(leaf, object_rays);
+}
+
 /// The closest hit of an instanced structure whose world-space items are merged into its top
 /// level (MergedTopLevel); `located` and `observer` as for instanced_closest_hit.
-template <TriangleTest kTest>
+/// `kItemsOutOfLine`: the items left in the tree are entered out of line (closest_in_items;
+/// MergedTopLevel::enters_items_out_of_line), else in the traversal's loop.
+template <TriangleTest kTest, bool kItemsOutOfLine>
 Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                        HitTriangle* located, const CloserHitObserver* observer) {
     const DirectionReciprocals reciprocals(ray.dir);
@@ -490,52 +619,46 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
     return with_merged_lanes(merged, [&]<class Lanes>() {
         Hit hit;
         PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
-        ObjectRayCache object_rays(world_ray);
+        ObjectRayCache object_rays(world_ray);  // for the items and leaves tested in the loop
         const ItemEntries entries(accel);
         // A hit in a merged object leaf read from the corner storage keeps its leaf-order
         // position until the query ends, and these ids turn it into a primID then (as
         // intersect_object_bvh does: the lookup's miss overlaps the rest of the traversal);
         // null when the leaf rows gave the primID or an entered item gave the hit.
         const PrimId* hit_prim_ids = nullptr;
+        const auto take = [&](const OutOfLineHit& found) {
+            if (!found.found) return;
+            world_ray.ray.tfar = found.hit.t;
+            hit = found.hit;
+            hit_prim_ids = found.hit_prim_ids;
+        };
         const auto object_leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
                                        unsigned slots) {
-            Lanes lanes = source_lanes<Lanes>(source);
-            const TriangleGroupRay& source_ray =
-                source_triangle_ray(source, world_ray, object_rays);
-            const auto test_lanes = [&] {
-                TriangleGroupHit group_hit;
-                if (lanes.template intersect<kTest>(
-                        source_ray, world_ray.ray.tnear, world_ray.ray.tfar, group_hit,
-                        located != nullptr ? &located->moller_terms : nullptr)) {
-                    world_ray.ray.tfar = group_hit.t;
-                    hit.t = group_hit.t;
-                    hit.u = group_hit.u;
-                    hit.v = group_hit.v;
-                    const std::uint32_t position = lanes.position(group_hit.index);
-                    hit.instance_id = source.instance;
-                    if (const std::optional<PrimId> id = row_prim_id(lanes, group_hit.index)) {
-                        hit.prim_id = *id;
-                        hit_prim_ids = nullptr;
-                    } else {
-                        hit.prim_id = position;
-                        hit_prim_ids = source.prim_ids;
-                        __builtin_prefetch(source.prim_ids + position);
-                    }
-                    if (located != nullptr) {
-                        located->leaf_position = position;
-                        located->corners = lanes.corners(group_hit.index);
-                        located->has_moller_terms = moller_terms_computed<kTest>();
-                        closer_hit_notifier(observer, source.instance)(*located);
-                    }
-                }
-            };
-            test_each_leaf(lanes, refs, slots, counters, test_lanes, [] { return false; });
+            TraversalRay& traversal = world_ray.ray;
+            if constexpr (!kItemsOutOfLine) {
+                closest_in_merged_leaves<kTest, Lanes>(
+                    source, refs, slots, source_triangle_ray(source, world_ray, object_rays),
+                    traversal.tnear, traversal.tfar, hit, hit_prim_ids, counters, located,
+                    observer);
+            } else if (source.space == InstanceTarget::kWorldSpace) {
+                closest_in_merged_leaves<kTest, Lanes>(source, refs, slots, world_ray.triangle_ray,
+                                                       traversal.tnear, traversal.tfar, hit,
+                                                       hit_prim_ids, counters, located, observer);
+            } else {
+                take(closest_in_placed_leaves<kTest, Lanes>(source, refs, slots, ray.org, ray.dir,
+                                                            ray.tnear, traversal.tfar, counters,
+                                                            located, observer));
+            }
             return false;
         };
         const auto items = [&](NodeRef leaf) {
-            if (entries.closest<kTest>(leaf, object_rays, world_ray, hit, counters, located,
-                                       observer))
+            if constexpr (kItemsOutOfLine) {
+                take(closest_in_items<kTest>(entries, leaf, ray, reciprocals, world_ray.ray.tfar,
+                                             counters, located, observer));
+            } else if (entries.closest<kTest>(leaf, object_rays, world_ray, hit, counters, located,
+                                              observer)) {
                 hit_prim_ids = nullptr;
+            }
             return false;
         };
         MergedLeafVisitor<decltype(object_leaves), decltype(items)> visitor{merged, object_leaves,
@@ -551,30 +674,35 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
     });
 }
 
-template <TriangleTest kTest>
+template <TriangleTest kTest, bool kItemsOutOfLine>
 [[gnu::flatten]] bool merged_occluded(const InstancedAccel& accel, const Ray& ray) {
     const DirectionReciprocals reciprocals(ray.dir);
     if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
     const MergedTopLevel& merged = accel.merged_top_level();
     return with_merged_lanes(merged, [&]<class Lanes>() {
         PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
-        ObjectRayCache object_rays(world_ray);
+        ObjectRayCache object_rays(world_ray);  // for the items and leaves tested in the loop
         const ItemEntries entries(accel);
         const auto object_leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
                                        unsigned slots) {
-            Lanes lanes = source_lanes<Lanes>(source);
-            const TriangleGroupRay& source_ray =
-                source_triangle_ray(source, world_ray, object_rays);
-            bool is_occluded = false;
-            const auto test_lanes = [&] {
-                is_occluded =
-                    is_occluded || lanes.template occluded<kTest>(source_ray, world_ray.ray.tnear,
-                                                                  world_ray.ray.tfar);
-            };
-            test_each_leaf(lanes, refs, slots, nullptr, test_lanes, [&] { return is_occluded; });
-            return is_occluded;
+            if constexpr (!kItemsOutOfLine) {
+                return occluded_in_merged_leaves<kTest, Lanes>(
+                    source, refs, slots, source_triangle_ray(source, world_ray, object_rays),
+                    ray.tnear, ray.tfar);
+            } else if (source.space == InstanceTarget::kWorldSpace) {
+                return occluded_in_merged_leaves<kTest, Lanes>(
+                    source, refs, slots, world_ray.triangle_ray, ray.tnear, ray.tfar);
+            } else {
+                return occluded_in_placed_leaves<kTest, Lanes>(source, refs, slots, ray.org,
+                                                               ray.dir, ray.tnear, ray.tfar);
+            }
         };
-        const auto items = [&](NodeRef leaf) { return entries.occluded<kTest>(leaf, object_rays); };
+        const auto items = [&](NodeRef leaf) {
+            if constexpr (kItemsOutOfLine)
+                return occluded_in_items<kTest>(entries, leaf, ray, reciprocals);
+            else
+                return entries.occluded<kTest>(leaf, object_rays);
+        };
         MergedLeafVisitor<decltype(object_leaves), decltype(items)> visitor{merged, object_leaves,
                                                                             items};
         // Any order: the first hit ends the query.
@@ -612,9 +740,12 @@ inline constexpr TraceKernels kLevelTraceKernels{
     &intersect_entry<&sole_item_closest_hit<kTest>>,
     &sole_item_occluded<kTest>,
     &intersect_located_entry<&sole_item_closest_hit<kTest>>,
-    &intersect_entry<&merged_closest_hit<kTest>>,
-    &merged_occluded<kTest>,
-    &intersect_located_entry<&merged_closest_hit<kTest>>};
+    &intersect_entry<&merged_closest_hit<kTest, false>>,
+    &merged_occluded<kTest, false>,
+    &intersect_located_entry<&merged_closest_hit<kTest, false>>,
+    &intersect_entry<&merged_closest_hit<kTest, true>>,
+    &merged_occluded<kTest, true>,
+    &intersect_located_entry<&merged_closest_hit<kTest, true>>};
 
 /// This level's entry points with the triangle test `test`.
 inline const TraceKernels& level_trace_kernels(TriangleTest test) {

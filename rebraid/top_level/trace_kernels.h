@@ -37,6 +37,13 @@ struct TraceKernels {
     bool (*merged_occluded)(const InstancedAccel& accel, const Ray& ray);
     LocatedHit (*merged_intersect_located)(const InstancedAccel& accel, const Ray& ray,
                                            const CloserHitObserver* observer);
+    /// The same for a merged top level whose items are entered out of line
+    /// (MergedTopLevel::enters_items_out_of_line).
+    Hit (*merged_rare_items_intersect)(const InstancedAccel& accel, const Ray& ray,
+                                       TraversalCounters* counters);
+    bool (*merged_rare_items_occluded)(const InstancedAccel& accel, const Ray& ray);
+    LocatedHit (*merged_rare_items_intersect_located)(const InstancedAccel& accel, const Ray& ray,
+                                                      const CloserHitObserver* observer);
 };
 
 /// The kernels of `level` with the triangle test `test`. Throws rebraid::Error when this build

@@ -11,6 +11,8 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include "rebraid/bvh/leaf_row_hints.h"
@@ -73,12 +75,24 @@ Scene world_space_scene(std::uint32_t* ground = nullptr) {
 }
 
 InstancedAccel rebraided(const Scene& scene, bool merge, bool merge_placed = false,
-                         float placed_node_budget = 100.0f) {
+                         float placed_node_budget = 100.0f,
+                         float items_out_of_line_area_share = 0.5f) {
     RebraidSettings settings;
     settings.merge_world_space = merge;
     settings.merge_placed_instances = merge_placed;
     settings.merge_placed_node_budget = placed_node_budget;
+    settings.merge_items_out_of_line_area_share = items_out_of_line_area_share;
     return build_rebraid_accel(scene, own_object_bvh_builder(), settings);
+}
+
+/// Whether some top-level item is left in the merged tree (a leaf slot naming no source).
+bool keeps_items(const MergedTopLevel& merged) {
+    for (std::uint32_t n = 0; n < merged.first_object_node; ++n)
+        for (int slot = 0; slot < kBvhWidth; ++slot)
+            if (merged.nodes[n].children[slot].is_leaf() &&
+                (merged.nodes[n].leaf_row_hints[slot] & MergedTopLevel::kSourceWordFlag) == 0)
+                return true;
+    return false;
 }
 
 /// Placed instances, overlapping: their items are merged only with merge_placed_instances.
@@ -398,15 +412,43 @@ TEST(MergedTopLevel, AsksForRowsAheadWhereItsObjectBvhsDo) {
     EXPECT_EQ(large.nodes.size(), small.nodes.size());
 }
 
-class MergedRays : public ::testing::TestWithParam<bool> {};
+TEST(MergedTopLevel, EntersItemsOutOfLineWhereTheirAreasAddUpToLittle) {
+    std::uint32_t ground = kNoGround;
+    const Scene scene = world_space_scene(&ground);
+    // The ground quad stays an item (it spans its node) and its box is about the root's.
+    const InstancedAccel by_default = rebraided(scene, true);
+    ASSERT_TRUE(keeps_items(by_default.merged_top_level()));
+    EXPECT_FALSE(by_default.merged_top_level().enters_items_out_of_line);
+    EXPECT_FALSE(
+        rebraided(scene, true, false, 100.0f, 0.0f).merged_top_level().enters_items_out_of_line);
+    EXPECT_TRUE(
+        rebraided(scene, true, false, 100.0f, 1e6f).merged_top_level().enters_items_out_of_line);
+    // Without the ground, what is left is small items: out of line by default.
+    Scene small = scene;
+    small.instances.pop_back();
+    small.meshes.pop_back();
+    const InstancedAccel without_ground = rebraided(small, true);
+    ASSERT_TRUE(keeps_items(without_ground.merged_top_level()));
+    EXPECT_TRUE(without_ground.merged_top_level().enters_items_out_of_line);
+}
+
+/// Placed items merged or not, and the items left entered out of line or in the loop.
+class MergedRays : public ::testing::TestWithParam<std::tuple<bool, bool>> {};
 
 TEST_P(MergedRays, FindWhatEnteringTheItemsFinds) {
-    const bool placed = GetParam();
+    const auto [placed, out_of_line] = GetParam();
     const Scene scene = placed ? placed_scene() : world_space_scene();
-    InstancedAccel merged = rebraided(scene, true, placed);
+    InstancedAccel merged = rebraided(scene, true, placed, 100.0f, out_of_line ? 1e6f : 0.0f);
     InstancedAccel entered = rebraided(scene, false);
     ASSERT_FALSE(merged.merged_top_level().empty());
     EXPECT_EQ(has_placed_source(merged.merged_top_level()), placed);
+    EXPECT_EQ(merged.merged_top_level().enters_items_out_of_line,
+              out_of_line || !keeps_items(merged.merged_top_level()));
+    // The world-space scene keeps items (the ground, leaves not hung), so both forms of
+    // entering them are traced.
+    if (!placed) {
+        EXPECT_TRUE(keeps_items(merged.merged_top_level()));
+    }
     const std::vector<Ray> rays = test::varied_rays(entered, scene.bounds(), 10000, 7);
     for (const TriangleTest test : {TriangleTest::moller, TriangleTest::watertight}) {
         for (const SimdLevel level : runnable_simd_levels()) {
@@ -444,7 +486,7 @@ TEST_P(MergedRays, FindWhatEnteringTheItemsFinds) {
 }
 
 TEST_P(MergedRays, SameCopyOnAnyThreadCount) {
-    const bool placed = GetParam();
+    const bool placed = std::get<0>(GetParam());
     const Scene scene = placed ? placed_scene() : world_space_scene();
     test::expect_same_hash_on_threads({1, 2, 8}, [&] {
         const InstancedAccel accel = rebraided(scene, true, placed);
@@ -456,9 +498,12 @@ TEST_P(MergedRays, SameCopyOnAnyThreadCount) {
     });
 }
 
-INSTANTIATE_TEST_SUITE_P(MergedTopLevel, MergedRays, ::testing::Values(false, true),
+INSTANTIATE_TEST_SUITE_P(MergedTopLevel, MergedRays,
+                         ::testing::Combine(::testing::Bool(), ::testing::Bool()),
                          [](const auto& info) {
-                             return info.param ? "PlacedItems" : "WorldSpaceItems";
+                             return std::string(std::get<0>(info.param) ? "PlacedItems"
+                                                                        : "WorldSpaceItems") +
+                                    (std::get<1>(info.param) ? "OutOfLine" : "InTheLoop");
                          });
 
 }  // namespace

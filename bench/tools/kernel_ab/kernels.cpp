@@ -22,6 +22,20 @@ double sum_instanced_hits(const InstancedAccel& accel, const std::vector<Ray>& r
     return sum;
 }
 
+/// Every ray's closest hit through the merged query the structure takes: with the items entered
+/// in the loop or out of line (MergedTopLevel::enters_items_out_of_line), in revisions that
+/// have both, else the one merged query.
+template <TriangleTest kTest, class Accel>
+double sum_merged_hits(const Accel& accel, const std::vector<Ray>& rays, bool located) {
+    if constexpr (requires { &merged_closest_hit<kTest, true>; }) {
+        if (accel.merged_top_level().enters_items_out_of_line)
+            return sum_instanced_hits<&merged_closest_hit<kTest, true>>(accel, rays, located);
+        return sum_instanced_hits<&merged_closest_hit<kTest, false>>(accel, rays, located);
+    } else {
+        return sum_instanced_hits<&merged_closest_hit<kTest>>(accel, rays, located);
+    }
+}
+
 /// Closest hits of `rays` through the kernels this copy was compiled with: the query the
 /// structure takes (as InstancedAccel::use_kernels chooses it: one item, merged, or the
 /// general one; the flat query for a flat structure), located when asked, as the Embree glue
@@ -40,7 +54,7 @@ double KERNEL_AB_RUN(const FlatAccel* flat, const InstancedAccel* instanced,
                root.is_leaf() && root.prim_count() == 1) {
         t_sum = sum_instanced_hits<&sole_item_closest_hit<kTest>>(*instanced, rays, located);
     } else if (!instanced->merged_top_level().empty()) {
-        t_sum = sum_instanced_hits<&merged_closest_hit<kTest>>(*instanced, rays, located);
+        t_sum = sum_merged_hits<kTest>(*instanced, rays, located);
     } else {
         t_sum = sum_instanced_hits<&instanced_closest_hit<kTest>>(*instanced, rays, located);
     }
