@@ -265,21 +265,15 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     for (const MergedLeafSource& source : merged.sources)
         merged.every_source_has_rows = merged.every_source_has_rows && source.leaf_rows != nullptr;
     merged.root = top.root;
-    // The items left: their areas' sum over the root's, from the merged nodes' slot boxes.
-    const WideNode& root = merged.nodes[merged.root.node_id()];
-    BBox3f root_box;
-    for (int slot = 0; slot < kBvhWidth; ++slot)
-        if (!root.children[slot].is_empty()) root_box.extend(root.child_bounds(slot));
+    // The items left: their areas' sum over the root's.
     double item_area = 0.0;
-    for (std::uint32_t n = 0; n < merged.first_object_node; ++n) {
-        const WideNode& node = merged.nodes[n];
+    for (std::uint32_t n = 0; n < merged.first_object_node; ++n)
         for (int slot = 0; slot < kBvhWidth; ++slot)
-            if (node.children[slot].is_leaf() &&
-                (node.leaf_row_hints[slot] & MergedTopLevel::kSourceWordFlag) == 0)
-                item_area += double(node.child_bounds(slot).half_area());
-    }
+            if (MergedTopLevel::holds_item(merged.nodes[n], slot))
+                item_area += double(merged.nodes[n].child_bounds(slot).half_area());
     merged.enters_items_out_of_line =
-        item_area <= double(settings.items_out_of_line_area_share) * root_box.half_area();
+        item_area <= double(settings.items_out_of_line_area_share) *
+                         merged.nodes[merged.root.node_id()].bounds().half_area();
     if (std::ranges::any_of(views, &ObjectBvhView::prefetches_rows))
         merged.rows_prefetch_from = merged.first_object_node;
     return merged;

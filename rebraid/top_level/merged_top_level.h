@@ -126,6 +126,11 @@ struct MergedTopLevel {
     const MergedLeafSource& source_of_leaves(const WideNode& node, unsigned leaf_slots) const {
         return source_named_by(node.leaf_row_hints[std::countr_zero(leaf_slots)]);
     }
+    /// Whether slot `slot` of top-level node `node` holds an item left to enter: a leaf whose
+    /// hint word names no source.
+    static bool holds_item(const WideNode& node, int slot) {
+        return node.children[slot].is_leaf() && (node.leaf_row_hints[slot] & kSourceWordFlag) == 0;
+    }
     /// The source a hint word carrying kSourceWordFlag names.
     const MergedLeafSource& source_named_by(std::uint32_t word) const {
         return sources[word & ~kSourceWordFlag];

@@ -85,13 +85,11 @@ InstancedAccel rebraided(const Scene& scene, bool merge, bool merge_placed = fal
     return build_rebraid_accel(scene, own_object_bvh_builder(), settings);
 }
 
-/// Whether some top-level item is left in the merged tree (a leaf slot naming no source).
+/// Whether some top-level item is left in the merged tree.
 bool keeps_items(const MergedTopLevel& merged) {
     for (std::uint32_t n = 0; n < merged.first_object_node; ++n)
         for (int slot = 0; slot < kBvhWidth; ++slot)
-            if (merged.nodes[n].children[slot].is_leaf() &&
-                (merged.nodes[n].leaf_row_hints[slot] & MergedTopLevel::kSourceWordFlag) == 0)
-                return true;
+            if (MergedTopLevel::holds_item(merged.nodes[n], slot)) return true;
     return false;
 }
 
@@ -425,6 +423,7 @@ TEST(MergedTopLevel, EntersItemsOutOfLineWhereTheirAreasAddUpToLittle) {
         rebraided(scene, true, false, 100.0f, 1e6f).merged_top_level().enters_items_out_of_line);
     // Without the ground, what is left is small items: out of line by default.
     Scene small = scene;
+    ASSERT_EQ(ground, small.instances.size() - 1);
     small.instances.pop_back();
     small.meshes.pop_back();
     const InstancedAccel without_ground = rebraided(small, true);
@@ -486,12 +485,15 @@ TEST_P(MergedRays, FindWhatEnteringTheItemsFinds) {
 }
 
 TEST_P(MergedRays, SameCopyOnAnyThreadCount) {
-    const bool placed = std::get<0>(GetParam());
+    // Plain variables, not structured bindings: the lambda below captures them.
+    const bool placed = std::get<0>(GetParam()), out_of_line = std::get<1>(GetParam());
     const Scene scene = placed ? placed_scene() : world_space_scene();
     test::expect_same_hash_on_threads({1, 2, 8}, [&] {
-        const InstancedAccel accel = rebraided(scene, true, placed);
+        const InstancedAccel accel =
+            rebraided(scene, true, placed, 100.0f, out_of_line ? 1e6f : 0.0f);
         const MergedTopLevel& merged = accel.merged_top_level();
         StructureHash hash;
+        hash.add_value(merged.enters_items_out_of_line);
         hash.add<WideNode>(merged.nodes);
         for (const MergedLeafSource& source : merged.sources) hash.add_value(source.instance);
         return hash.value();
