@@ -86,7 +86,7 @@ TriangleTest triangle_test_for(const glue::ConvertedEmbreeScene& converted) {
 }
 
 /// Whether `accel`'s closest-hit queries give Embree's own Möller terms in `arithmetic`
-/// (EmbreeAccel::finishes_moller_terms_).
+/// (EmbreeAccel::intersect_finishing_terms).
 bool finishes_moller_terms(const InstancedAccel& accel, glue::EmbreeKernelArithmetic arithmetic) {
     return accel.simd_level() != SimdLevel::portable &&
            accel.triangle_test() == TriangleTest::moller &&
@@ -138,7 +138,7 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
     accel_->set_triangle_test(triangle_test_for(converted_));
     accel_->set_world_to_object(embree_world_to_object_);
-    finishes_moller_terms_ = finishes_moller_terms(*accel_, arithmetic_);
+    intersect_within_bounds_ = within_bounds_query();
     bounds_ = converted_.scene.bounds();
     pad_bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
@@ -233,7 +233,7 @@ void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
     if (!(in.tnear <= in.tfar)) return;
     if (is_ray_mask_supported_ && in.mask == 0) return;
     if (misses_bounds(in)) return;
-    intersect_within_bounds(rayhit);
+    (this->*intersect_within_bounds_)(rayhit);
 }
 
 namespace {
@@ -246,12 +246,25 @@ bool has_zero_coordinate(const Ray& ray) {
            ray.dir.y == 0.0f || ray.dir.z == 0.0f;
 }
 
-/// Writes a hit into `rayhit`: Embree's attributes where its arithmetic gave them, else (a
-/// grazing hit Embree's rounding calls parallel, which it would not report) the traversal's
-/// own t, u, v and the normal of `corners`.
-void write_hit(RTCRayHit& rayhit, const Hit& hit, const glue::EmbreeHitIds& ids,
-               const std::optional<glue::EmbreeHitAttributes>& embree_hit,
-               const TriangleVerts& corners) {
+/// The traversal's own t, u, v and the normal of the hit triangle: for a grazing hit Embree's
+/// rounding calls parallel (which it would not report). Rare, so out of line.
+[[gnu::noinline, gnu::cold]] void write_own_attributes(RTCRayHit& rayhit, const Hit& hit,
+                                                       const HitTriangle& triangle) {
+    const TriangleVerts corners = triangle.corners();
+    const Vec3f normal = cross(corners.v2 - corners.v0, corners.v0 - corners.v1);
+    rayhit.ray.tfar = hit.t;
+    rayhit.hit.Ng_x = normal.x;
+    rayhit.hit.Ng_y = normal.y;
+    rayhit.hit.Ng_z = normal.z;
+    rayhit.hit.u = hit.u;
+    rayhit.hit.v = hit.v;
+}
+
+/// Writes a hit into `rayhit`: Embree's attributes where its arithmetic gave them, else
+/// write_own_attributes.
+inline void write_hit(RTCRayHit& rayhit, const Hit& hit, const glue::EmbreeHitIds& ids,
+                      const std::optional<glue::EmbreeHitAttributes>& embree_hit,
+                      const HitTriangle& triangle) {
     RTCRay& ray = rayhit.ray;
     if (embree_hit) {
         // Embree's t when it lies in the ray's interval (it does but for rounding at the
@@ -264,13 +277,7 @@ void write_hit(RTCRayHit& rayhit, const Hit& hit, const glue::EmbreeHitIds& ids,
         rayhit.hit.u = embree_hit->u;
         rayhit.hit.v = embree_hit->v;
     } else {
-        const Vec3f normal = cross(corners.v2 - corners.v0, corners.v0 - corners.v1);
-        ray.tfar = hit.t;
-        rayhit.hit.Ng_x = normal.x;
-        rayhit.hit.Ng_y = normal.y;
-        rayhit.hit.Ng_z = normal.z;
-        rayhit.hit.u = hit.u;
-        rayhit.hit.v = hit.v;
+        write_own_attributes(rayhit, hit, triangle);
     }
     rayhit.hit.primID = hit.prim_id;
     rayhit.hit.geomID = ids.geom_id;
@@ -296,29 +303,31 @@ struct EmbreeAccel::PendingAttributes {
 std::optional<glue::EmbreeHitAttributes> EmbreeAccel::recomputed_attributes(
     const Ray& ray, InstanceId instance, const HitTriangle& triangle) const noexcept {
     const bool is_instanced = converted_.instance_ids[instance].inst_id != RTC_INVALID_GEOMETRY_ID;
-    const TriangleVerts& corners = triangle.corners;
+    const TriangleVerts corners = triangle.corners();
     return glue::embree_hit_attributes(ray,
                                        is_instanced ? &embree_world_to_object_[instance] : nullptr,
                                        {corners.v0, corners.v1, corners.v2}, arithmetic_);
 }
 
-void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
+void EmbreeAccel::intersect_observing(RTCRayHit& rayhit) const noexcept {
     const Ray ray = glue::from_embree_ray(rayhit.ray);
-    if (!finishes_moller_terms_) {
-        PendingAttributes pending{*this, ray, std::nullopt};
-        const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
-        const LocatedHit located = accel_->intersect_located(ray, &observer);
-        if (!located.hit.is_hit()) return;
-        write_hit(rayhit, located.hit, converted_.instance_ids[located.hit.instance_id],
-                  pending.attributes, located.triangle.corners);
-        return;
-    }
+    PendingAttributes pending{*this, ray, std::nullopt};
+    const CloserHitObserver observer{&PendingAttributes::on_closer_hit, &pending};
+    const LocatedHit located = accel_->intersect_located(ray, &observer);
+    if (!located.hit.is_hit()) return;
+    write_hit(rayhit, located.hit, converted_.instance_ids[located.hit.instance_id],
+              pending.attributes, located.triangle);
+}
+
+template <float (*kEstimate)(float)>
+void EmbreeAccel::intersect_finishing_terms(RTCRayHit& rayhit) const noexcept {
     // Our traversal finds the triangle and t; the reported attributes must be Embree's to the
     // last bit. The SIMD kernels' Möller test computed Embree's own terms (the ray in Embree's
     // object space: set_world_to_object), so Embree's reciprocal finishes them; they are
     // computed again the way Embree computes them (its world-to-object map, its kernel's
     // rounding) only where the query ran another test, or entered an instance placed by the
     // identity with the world ray while a zero coordinate may differ in sign from Embree's.
+    const Ray ray = glue::from_embree_ray(rayhit.ray);
     const LocatedHit located = accel_->intersect_located(ray, nullptr);
     const Hit& hit = located.hit;
     if (!hit.is_hit()) return;
@@ -329,11 +338,32 @@ void EmbreeAccel::intersect_within_bounds(RTCRayHit& rayhit) const noexcept {
         !(ids.inst_id != RTC_INVALID_GEOMETRY_ID &&
           accel_->instance_targets()[hit.instance_id].space == InstanceTarget::kWorldSpace &&
           has_zero_coordinate(ray));
+    const MollerTerms& terms = triangle.moller_terms;
     write_hit(rayhit, hit, ids,
               keeps_terms
-                  ? glue::embree_hit_attributes_from_terms(triangle.moller_terms, arithmetic_)
+                  ? glue::embree_fused_attributes_from_terms(terms, kEstimate(terms.abs_den))
                   : recomputed_attributes(ray, hit.instance_id, triangle),
-              triangle.corners);
+              triangle);
+}
+
+void EmbreeAccel::intersect_finishing_terms_12(RTCRayHit& rayhit) const noexcept {
+    intersect_finishing_terms<&glue::embree_reciprocal_estimate_12>(rayhit);
+}
+
+// Compiled for AVX-512 (chosen only where Embree runs its AVX-512 kernels), so that the
+// 14-bit estimate inlines with the rest.
+#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx512f"), flatten))
+#endif
+void EmbreeAccel::intersect_finishing_terms_14(RTCRayHit& rayhit) const noexcept {
+    intersect_finishing_terms<&glue::embree_reciprocal_estimate_14>(rayhit);
+}
+
+EmbreeAccel::WithinBounds EmbreeAccel::within_bounds_query() const {
+    if (!finishes_moller_terms(*accel_, arithmetic_)) return &EmbreeAccel::intersect_observing;
+    return arithmetic_ == glue::EmbreeKernelArithmetic::fused_rcp14
+               ? &EmbreeAccel::intersect_finishing_terms_14
+               : &EmbreeAccel::intersect_finishing_terms_12;
 }
 
 void EmbreeAccel::occluded1(RTCRay& in) const noexcept {
@@ -386,7 +416,7 @@ EmbreeUpdateReport EmbreeAccel::update() {
     accel_ = std::move(next_accel);
     pad_bounds();  // of the new top level
     embree_world_to_object_ = std::move(world_to_object);
-    finishes_moller_terms_ = finishes_moller_terms(*accel_, arithmetic_);
+    intersect_within_bounds_ = within_bounds_query();
     report.update_ms = timer.elapsed_ms();
     return report;
 }

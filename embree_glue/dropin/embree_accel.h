@@ -151,10 +151,23 @@ private:
     /// True when `ray` certainly misses every triangle: its line misses the padded scene
     /// bounds.
     bool misses_bounds(const RTCRay& ray) const noexcept;
-    /// intersect1 for an active ray that may hit something. Out of line, so that the rays
-    /// intersect1 turns away (most of a frame that frames a whole scene) return without
+    /// intersect1 for an active ray that may hit something: one of the forms below, chosen
+    /// with the structure (within_bounds_query). Called through a pointer, so out of line: the
+    /// rays intersect1 turns away (most of a frame that frames a whole scene) return without
     /// paying for the traversal's registers and stack.
-    [[gnu::noinline]] void intersect_within_bounds(RTCRayHit& rayhit) const noexcept;
+    using WithinBounds = void (EmbreeAccel::*)(RTCRayHit& rayhit) const noexcept;
+    WithinBounds within_bounds_query() const;
+    /// Where the query does not give Embree's own Möller terms: Embree's attributes computed
+    /// again for each closer hit as it is found.
+    void intersect_observing(RTCRayHit& rayhit) const noexcept;
+    /// Where it does: the closest hit's terms finished with Embree's reciprocal, which starts
+    /// from the estimate `kEstimate` gives.
+    template <float (*kEstimate)(float)>
+    void intersect_finishing_terms(RTCRayHit& rayhit) const noexcept;
+    /// For Embree's AVX2 kernels (the 12-bit estimate).
+    void intersect_finishing_terms_12(RTCRayHit& rayhit) const noexcept;
+    /// For its AVX-512 kernels (the 14-bit estimate): compiled for AVX-512.
+    void intersect_finishing_terms_14(RTCRayHit& rayhit) const noexcept;
     /// Embree's attributes of each closer hit as the traversal finds it (embree_accel.cpp).
     struct PendingAttributes;
     /// Embree's attributes of the hit of `ray` on `triangle` of `instance`, computed again
@@ -170,10 +183,11 @@ private:
     bool has_native_packets16_ = false;
     /// How Embree rounds on this machine: the hit attributes are computed the same way.
     glue::EmbreeKernelArithmetic arithmetic_ = glue::EmbreeKernelArithmetic::separate;
-    /// The structure's queries give Embree's own Möller terms (a SIMD kernel, the Möller
-    /// test, fused arithmetic): the closest hit's attributes are finished from them once,
-    /// after the traversal, rather than computed for every closer hit as it is found.
-    bool finishes_moller_terms_ = false;
+    /// intersect1's query past its early returns: where the structure's queries give Embree's
+    /// own Möller terms (a SIMD kernel, the Möller test, fused arithmetic), the closest hit's
+    /// attributes are finished from them once, after the traversal, rather than computed for
+    /// every closer hit as it is found.
+    WithinBounds intersect_within_bounds_ = nullptr;
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;

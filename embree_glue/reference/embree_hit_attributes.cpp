@@ -2,11 +2,6 @@
 
 #include <cmath>
 
-#if defined(__x86_64__) || defined(_M_X64) || defined(__i386__)
-#include <immintrin.h>
-#define REBRAID_HAS_SSE_RCP 1
-#endif
-
 namespace rebraid::glue {
 namespace {
 
@@ -24,39 +19,17 @@ inline float rounded(float x) {
     return x;
 }
 
-/// The hardware's 12-bit reciprocal estimate (rcpss), the start of Embree's reciprocal in
-/// its SSE, AVX and AVX2 kernels. The table is the CPU's own.
-float reciprocal_estimate_12(float x) {
-#if defined(REBRAID_HAS_SSE_RCP)
-    return _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(x)));
-#else
-    return 1.0f / x;
-#endif
-}
-
-/// The 14-bit estimate (vrcp14ss) Embree's AVX-512 kernels start from. Compiled for AVX-512
-/// on its own: only called where the CPU has it.
-#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx512f"))) float reciprocal_estimate_14(float x) {
-    return _mm_cvtss_f32(_mm_rcp14_ss(_mm_setzero_ps(), _mm_set_ss(x)));
-}
-#else
-float reciprocal_estimate_14(float x) {
-    return 1.0f / x;
-}
-#endif
-
 /// Embree's multiply-adds in the AVX2 kernels: one rounding each.
 struct FusedOps {
     static float madd(float a, float b, float c) { return std::fma(a, b, c); }    // a * b + c
     static float msub(float a, float b, float c) { return std::fma(a, b, -c); }   // a * b - c
     static float nmadd(float a, float b, float c) { return std::fma(-a, b, c); }  // c - a * b
-    static float estimate(float x) { return reciprocal_estimate_12(x); }
+    static float estimate(float x) { return embree_reciprocal_estimate_12(x); }
 };
 
 /// Embree's AVX-512 kernels: fused as AVX2's, with the 14-bit reciprocal estimate.
 struct FusedRcp14Ops : FusedOps {
-    static float estimate(float x) { return reciprocal_estimate_14(x); }
+    static float estimate(float x) { return embree_reciprocal_estimate_14(x); }
 };
 
 /// Embree's multiply-adds in the SSE and AVX kernels: the product rounds, then the sum.
@@ -64,7 +37,7 @@ struct SeparateOps {
     static float madd(float a, float b, float c) { return rounded(a * b) + c; }
     static float msub(float a, float b, float c) { return rounded(a * b) - c; }
     static float nmadd(float a, float b, float c) { return c - rounded(a * b); }
-    static float estimate(float x) { return reciprocal_estimate_12(x); }
+    static float estimate(float x) { return embree_reciprocal_estimate_12(x); }
 };
 
 template <typename Ops>
@@ -109,15 +82,7 @@ Vec3f kernel_transform_vector(const AffineTransform& m, Vec3f d) {
 /// Embree's attributes from the test's terms: its reciprocal of |den| times each.
 template <typename Ops>
 std::optional<EmbreeHitAttributes> attributes_from_terms(const MollerTerms& terms) {
-    const float reciprocal = kernel_reciprocal<Ops>(terms.abs_den);
-    EmbreeHitAttributes hit;
-    hit.t = terms.scaled_t * reciprocal;
-    hit.u = terms.scaled_u * reciprocal;
-    hit.v = terms.scaled_v * reciprocal;
-    hit.geometry_normal = terms.normal;
-    if (!std::isfinite(hit.t) || !std::isfinite(hit.u) || !std::isfinite(hit.v))
-        return std::nullopt;
-    return hit;
+    return embree_attributes_from_reciprocal(terms, kernel_reciprocal<Ops>(terms.abs_den));
 }
 
 template <typename Ops>
@@ -157,7 +122,7 @@ std::optional<EmbreeHitAttributes> hit_attributes(const Ray& world_ray,
 }  // namespace
 
 EmbreeKernelArithmetic detect_embree_kernel_arithmetic() {
-#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
         __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
         __builtin_cpu_supports("avx512vl"))
@@ -201,7 +166,7 @@ namespace {
 
 /// hit_attributes<FusedRcp14Ops> compiled for AVX-512 as a whole (only called where the CPU
 /// has it), so that the 14-bit estimate and every helper inline into one body.
-#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
 __attribute__((target("avx512f"), flatten))
 #endif
 std::optional<EmbreeHitAttributes>
@@ -225,7 +190,7 @@ std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
 
 namespace {
 
-#if defined(REBRAID_HAS_SSE_RCP) && (defined(__GNUC__) || defined(__clang__))
+#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
 __attribute__((target("avx512f"), flatten))
 #endif
 std::optional<EmbreeHitAttributes>

@@ -1,7 +1,13 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <optional>
+
+#if defined(__x86_64__) || defined(_M_X64) || defined(__i386__)
+#include <immintrin.h>
+#define REBRAID_GLUE_HAS_RCP_ESTIMATES 1
+#endif
 
 #include "rebraid/bvh/hit_triangle.h"
 #include "rebraid/core/ray.h"
@@ -41,6 +47,48 @@ struct EmbreeHitAttributes {
     Vec3f geometry_normal;  ///< cross(v2 - v0, v0 - v1), unnormalised, in object space
 };
 
+/// The hardware's 12-bit reciprocal estimate (rcpss), the start of Embree's reciprocal in
+/// its SSE, AVX and AVX2 kernels. The table is the CPU's own.
+inline float embree_reciprocal_estimate_12(float x) {
+#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES)
+    return _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(x)));
+#else
+    return 1.0f / x;
+#endif
+}
+
+/// The 14-bit estimate (vrcp14ss) Embree's AVX-512 kernels start from. Compiled for AVX-512
+/// on its own: call it only where the CPU has it (code compiled for AVX-512 inlines it).
+#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx512f"))) inline float embree_reciprocal_estimate_14(float x) {
+    return _mm_cvtss_f32(_mm_rcp14_ss(_mm_setzero_ps(), _mm_set_ss(x)));
+}
+#else
+inline float embree_reciprocal_estimate_14(float x) {
+    return 1.0f / x;
+}
+#endif
+
+/// Embree's attributes from a hit's Möller terms and its reciprocal of |n.dir|: each term
+/// times the reciprocal; nullopt where a result is not finite.
+inline std::optional<EmbreeHitAttributes> embree_attributes_from_reciprocal(
+    const MollerTerms& terms, float reciprocal) {
+    EmbreeHitAttributes hit;
+    hit.t = terms.scaled_t * reciprocal;
+    hit.u = terms.scaled_u * reciprocal;
+    hit.v = terms.scaled_v * reciprocal;
+    hit.geometry_normal = terms.normal;
+    if (!std::isfinite(hit.t) || !std::isfinite(hit.u) || !std::isfinite(hit.v))
+        return std::nullopt;
+    return hit;
+}
+
+/// Embree's reciprocal of x in its fused kernels (AVX2, AVX-512), from the hardware estimate
+/// `estimate` of 1 / x they start from: one Newton step, r + r * (1 - x * r), fused.
+inline float embree_fused_reciprocal(float x, float estimate) {
+    return std::fma(estimate, std::fma(-x, estimate, 1.0f), estimate);
+}
+
 /// The attributes of the hit of `world_ray` on the triangle `corners` (in object space),
 /// computed as Embree 3.13's instance and triangle kernels compute them: the ray mapped to
 /// object space with `world_to_object` (from embree_world_to_object; null for a triangle
@@ -68,5 +116,13 @@ std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
 /// not finite.
 std::optional<EmbreeHitAttributes> embree_hit_attributes_from_terms(
     const MollerTerms& terms, EmbreeKernelArithmetic arithmetic);
+/// The same in a fused arithmetic, inline for a caller on every ray's path that computed the
+/// estimate of 1 / terms.abs_den the arithmetic starts from (embree_reciprocal_estimate_12
+/// for fused, embree_reciprocal_estimate_14 for fused_rcp14).
+inline std::optional<EmbreeHitAttributes> embree_fused_attributes_from_terms(
+    const MollerTerms& terms, float estimate) {
+    return embree_attributes_from_reciprocal(terms,
+                                             embree_fused_reciprocal(terms.abs_den, estimate));
+}
 
 }  // namespace rebraid::glue

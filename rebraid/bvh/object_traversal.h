@@ -36,8 +36,7 @@ inline bool rows_serve([[maybe_unused]] ObjectBvhView bvh, [[maybe_unused]] Node
 
 /// A closer-hit callback that does nothing (intersect_object_bvh_leaf_order's default).
 struct NoHitDataPrefetch {
-    template <class Corners>
-    void operator()(std::uint32_t, Corners&&, std::optional<PrimId>) const {}
+    void operator()(std::uint32_t, CornerLocation, std::optional<PrimId>) const {}
 };
 
 /// The triangles of a leaf (a leaf-order range of one BVH) in the lanes of group tests, 8 at a
@@ -74,8 +73,8 @@ public:
     std::uint32_t position(std::uint32_t lane) const {
         return std::uint32_t(lanes_[lane] - triangles_);
     }
-    /// Corners of the triangle in `lane`.
-    TriangleVerts corners(std::uint32_t lane) const { return *lanes_[lane]; }
+    /// Where the triangle in `lane` keeps its corners.
+    CornerLocation corner_location(std::uint32_t lane) const { return {lanes_[lane]}; }
 
 private:
     const TriangleVerts* triangles_;
@@ -140,9 +139,8 @@ bool intersect_with_lanes(Lanes& lanes, ObjectBvhView bvh, NodeRef start, Prepar
             hit.u = group_hit.u;
             hit.v = group_hit.v;
             hit.prim_id = lanes.position(group_hit.index);
-            prefetch_hit_data(
-                hit.prim_id, [&lanes, lane = group_hit.index] { return lanes.corners(lane); },
-                row_prim_id(lanes, group_hit.index));
+            prefetch_hit_data(hit.prim_id, lanes.corner_location(group_hit.index),
+                              row_prim_id(lanes, group_hit.index));
             found = true;
         }
     };
@@ -194,12 +192,12 @@ bool occluded_with_lanes(Lanes& lanes, const WideNode* nodes, NodeRef start, Pre
 /// hit.prim_id to the hit's position in leaf order (index into bvh.prim_ids and bvh.triangles), and
 /// returns true; leaves hit.instance_id to the caller. `prefetch_hit_data(position, corners,
 /// row_id)` is called with the leaf-order position of every closer hit as it is found,
-/// `corners()` gives that triangle's corners from the leaf data the test has just read, and
+/// `corners` where the leaf data the test has just read keeps that triangle's corners, and
 /// `row_id` its primID where that data holds it (leaf rows; else nullopt): the caller prefetches
 /// what it will look up for the final hit (ids in leaf order), so that the lookup's cache miss
-/// overlaps the rest of the traversal, or copies the corners. (Asking for every visited leaf's ids
-/// instead cost more than the misses it hid.) `start_leaf` says what a leaf `start` may be
-/// (StartLeaf). With `terms` given, a SIMD kernel's Möller test writes each closer hit's terms
+/// overlaps the rest of the traversal, or notes where the corners are. (Asking for every visited
+/// leaf's ids instead cost more than the misses it hid.) `start_leaf` says what a leaf `start` may
+/// be (StartLeaf). With `terms` given, a SIMD kernel's Möller test writes each closer hit's terms
 /// there before `prefetch_hit_data` is called (moller_terms_computed).
 template <TriangleTest kTest, class HitDataPrefetch = NoHitDataPrefetch>
 bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedRay& prepared,
@@ -224,10 +222,9 @@ bool intersect_object_bvh_leaf_order(ObjectBvhView bvh, NodeRef start, PreparedR
 /// `kTest`, for a ray already in the BVH's space. On a closer hit sets ray.tfar and
 /// hit.t/u/v/prim_id (mesh primID) and returns true; leaves hit.instance_id to the caller. With
 /// `located` given, also sets located->leaf_position to the hit's leaf-order position and
-/// located->corners to its corners, copied as each closer hit is found from the leaf data the test
-/// had just read (that caller reads them next: from ObjectBvh::triangles they would cost a cache
-/// miss), and its Möller terms where this kernel computes them (moller_terms_computed), and then
-/// calls `on_closer_hit(*located)`. `start_leaf`: see StartLeaf.
+/// located->corner_location to where the leaf data the test read keeps its corners, and its
+/// Möller terms where this kernel computes them (moller_terms_computed), as each closer hit is
+/// found, and then calls `on_closer_hit(*located)`. `start_leaf`: see StartLeaf.
 template <TriangleTest kTest, class OnCloserHit = void (*)(const HitTriangle&)>
 bool intersect_object_bvh(
     ObjectBvhView bvh, NodeRef start, PreparedRay& ray, Hit& hit, TraversalCounters* counters,
@@ -237,13 +234,13 @@ bool intersect_object_bvh(
     const PrimId* prim_ids = bvh.prim_ids;
     // The closest hit's primID where its leaf's rows gave it (no lookup after the query).
     std::optional<PrimId> row_id;
-    const auto prefetch_hit_data = [&](std::uint32_t position, auto&& corners,
+    const auto prefetch_hit_data = [&](std::uint32_t position, CornerLocation corners,
                                        std::optional<PrimId> id_from_rows) {
         row_id = id_from_rows;
         if (!row_id) __builtin_prefetch(prim_ids + position);
         if (located != nullptr) {
             located->leaf_position = position;
-            located->corners = corners();
+            located->corner_location = corners;
             located->has_moller_terms = moller_terms_computed<kTest>();
             on_closer_hit(*located);
         }

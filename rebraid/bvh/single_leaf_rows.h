@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "rebraid/bvh/hit_triangle.h"
 #include "rebraid/bvh/leaf_rows.h"
 #include "rebraid/bvh/triangle_group.h"
 #include "rebraid/core/simd_config.h"
@@ -65,9 +66,9 @@ public:
     static constexpr bool kHoldsPrimIds = true;
     /// PrimID of the triangle in `lane`, from its leaf's id row.
     PrimId prim_id(std::uint32_t lane) const { return leaf_row_prim_id(base_ + lane, stride_); }
-    /// Corners of the triangle in `lane`, from its rows.
-    TriangleVerts corners(std::uint32_t lane) const {
-        return leaf_row_corners(base_ + lane, stride_);
+    /// Where the triangle in `lane` keeps its corners: its rows.
+    CornerLocation corner_location(std::uint32_t lane) const {
+        return {nullptr, base_ + lane, stride_};
     }
 
 private:

@@ -9,10 +9,10 @@
 namespace rebraid {
 
 /// A closest hit and its triangle: where it is kept in the leaf order of its mesh's object
-/// BVH, and its corners. For callers that recompute hit attributes from the corners right
-/// after the query (the Embree glue recomputes Embree's): the query copies them from the leaf
-/// data it has just tested as it finds each closer hit, where reading ObjectBvh::triangles
-/// afterwards would cost a cache miss.
+/// BVH, its Möller terms, and where its corners are. For callers that finish or recompute hit
+/// attributes right after the query (the Embree glue gives Embree's): the corners are read from
+/// the leaf data the query has just tested (HitTriangle::corners), still in the caches, and
+/// only by a caller that needs them.
 struct LocatedHit {
     Hit hit;
     HitTriangle triangle;

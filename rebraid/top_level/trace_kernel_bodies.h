@@ -508,7 +508,7 @@ void closest_in_merged_leaves(const MergedLeafSource& source, const NodeRef* ref
             }
             if (located != nullptr) {
                 located->leaf_position = position;
-                located->corners = lanes.corners(group_hit.index);
+                located->corner_location = lanes.corner_location(group_hit.index);
                 located->has_moller_terms = moller_terms_computed<kTest>();
                 closer_hit_notifier(observer, source.instance)(*located);
             }

@@ -175,8 +175,9 @@ TEST(EmbreeHitAttributes, ReproduceEmbreesAvx2KernelsBitForBit) {
 }
 
 // The SIMD kernels' Möller test computes Embree's own terms when rays enter instances through
-// Embree's world-to-object maps: finishing them (embree_hit_attributes_from_terms) gives what
-// the full recomputation gives, bit for bit, in both fused arithmetics. The portable kernels
+// Embree's world-to-object maps: finishing them (embree_hit_attributes_from_terms, and its
+// inline form embree_fused_attributes_from_terms) gives what the full recomputation gives, bit
+// for bit, in both fused arithmetics. The portable kernels
 // and the watertight test give no terms.
 TEST(EmbreeHitAttributes, TraversalTermsFinishToTheRecomputedAttributesBitForBit) {
     const Scene scene = make_default_scene();
@@ -201,7 +202,7 @@ TEST(EmbreeHitAttributes, TraversalTermsFinishToTheRecomputedAttributesBitForBit
                 if (!gives_terms) continue;
                 const bool is_identity = scene.instances[located.hit.instance_id].object_to_world ==
                                          AffineTransform::identity();
-                const TriangleVerts& c = located.triangle.corners;
+                const TriangleVerts c = located.triangle.corners();
                 for (auto arithmetic : {glue::EmbreeKernelArithmetic::fused,
                                         glue::EmbreeKernelArithmetic::fused_rcp14}) {
                     if (arithmetic == glue::EmbreeKernelArithmetic::fused_rcp14 &&
@@ -213,8 +214,22 @@ TEST(EmbreeHitAttributes, TraversalTermsFinishToTheRecomputedAttributesBitForBit
                         ray, is_identity ? nullptr : &maps[located.hit.instance_id],
                         {c.v0, c.v1, c.v2}, arithmetic);
                     ASSERT_EQ(finished.has_value(), recomputed.has_value());
+                    // The inline form the drop-in runs, from the arithmetic's own estimate.
+                    const float abs_den = located.triangle.moller_terms.abs_den;
+                    const auto finished_inline = glue::embree_fused_attributes_from_terms(
+                        located.triangle.moller_terms,
+                        arithmetic == glue::EmbreeKernelArithmetic::fused
+                            ? glue::embree_reciprocal_estimate_12(abs_den)
+                            : glue::embree_reciprocal_estimate_14(abs_den));
+                    ASSERT_EQ(finished_inline.has_value(), finished.has_value());
                     if (!finished) continue;
                     ++compared;
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished_inline->t),
+                              std::bit_cast<std::uint32_t>(finished->t));
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished_inline->u),
+                              std::bit_cast<std::uint32_t>(finished->u));
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished_inline->v),
+                              std::bit_cast<std::uint32_t>(finished->v));
                     EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->t),
                               std::bit_cast<std::uint32_t>(recomputed->t));
                     EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->u),

@@ -152,7 +152,7 @@ TEST(InstancedAccel, LocatedHitsAreTheHitsAndNameTheirTrianglesPositionAndCorner
                     located_right =
                         triangle.leaf_position < bvh.prim_ids.size() &&
                         bvh.prim_ids[triangle.leaf_position] == hit.prim_id &&
-                        same_corners(bvh.triangles[triangle.leaf_position], triangle.corners);
+                        same_corners(bvh.triangles[triangle.leaf_position], triangle.corners());
                 }
                 wrong += !(same_hit && located_right);
             }
@@ -196,7 +196,7 @@ TEST(InstancedAccel, ObserverHearsEveryCloserHitAndLastTheClosest) {
                 calls += heard.calls;
                 right = right && heard.calls >= 1 && heard.instance == located.hit.instance_id &&
                         heard.triangle.leaf_position == located.triangle.leaf_position &&
-                        same_corners(heard.triangle.corners, located.triangle.corners);
+                        same_corners(heard.triangle.corners(), located.triangle.corners());
             } else {
                 right = right && heard.calls == 0;
             }
@@ -221,8 +221,8 @@ struct ExactAnswers {
                                          each.prim_id, std::bit_cast<std::uint32_t>(each.u),
                                          std::bit_cast<std::uint32_t>(each.v)});
             bits.push_back(located.triangle.leaf_position);
-            for (const Vec3f& corner : {located.triangle.corners.v0, located.triangle.corners.v1,
-                                        located.triangle.corners.v2})
+            const TriangleVerts corners = located.triangle.corners();
+            for (const Vec3f& corner : {corners.v0, corners.v1, corners.v2})
                 for (int axis = 0; axis < 3; ++axis)
                     bits.push_back(std::bit_cast<std::uint32_t>(corner[axis]));
             bits.push_back(accel.occluded(ray));
