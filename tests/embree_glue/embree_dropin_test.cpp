@@ -174,6 +174,17 @@ TEST(EmbreeHitAttributes, ReproduceEmbreesAvx2KernelsBitForBit) {
     expect_bit_identical_attributes("isa=avx2", glue::EmbreeKernelArithmetic::fused);
 }
 
+/// Expects `a` and `b` to be the same attributes to the last bit.
+void expect_same_attribute_bits(const glue::EmbreeHitAttributes& a,
+                                const glue::EmbreeHitAttributes& b) {
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(a.t), std::bit_cast<std::uint32_t>(b.t));
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(a.u), std::bit_cast<std::uint32_t>(b.u));
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(a.v), std::bit_cast<std::uint32_t>(b.v));
+    EXPECT_EQ(a.geometry_normal.x, b.geometry_normal.x);
+    EXPECT_EQ(a.geometry_normal.y, b.geometry_normal.y);
+    EXPECT_EQ(a.geometry_normal.z, b.geometry_normal.z);
+}
+
 // The SIMD kernels' Möller test computes Embree's own terms when rays enter instances through
 // Embree's world-to-object maps: finishing them (embree_hit_attributes_from_terms, and its
 // inline form embree_fused_attributes_from_terms) gives what the full recomputation gives, bit
@@ -224,21 +235,8 @@ TEST(EmbreeHitAttributes, TraversalTermsFinishToTheRecomputedAttributesBitForBit
                     ASSERT_EQ(finished_inline.has_value(), finished.has_value());
                     if (!finished) continue;
                     ++compared;
-                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished_inline->t),
-                              std::bit_cast<std::uint32_t>(finished->t));
-                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished_inline->u),
-                              std::bit_cast<std::uint32_t>(finished->u));
-                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished_inline->v),
-                              std::bit_cast<std::uint32_t>(finished->v));
-                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->t),
-                              std::bit_cast<std::uint32_t>(recomputed->t));
-                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->u),
-                              std::bit_cast<std::uint32_t>(recomputed->u));
-                    EXPECT_EQ(std::bit_cast<std::uint32_t>(finished->v),
-                              std::bit_cast<std::uint32_t>(recomputed->v));
-                    EXPECT_EQ(finished->geometry_normal.x, recomputed->geometry_normal.x);
-                    EXPECT_EQ(finished->geometry_normal.y, recomputed->geometry_normal.y);
-                    EXPECT_EQ(finished->geometry_normal.z, recomputed->geometry_normal.z);
+                    expect_same_attribute_bits(*finished_inline, *finished);
+                    expect_same_attribute_bits(*finished, *recomputed);
                 }
             }
             if (gives_terms) {
