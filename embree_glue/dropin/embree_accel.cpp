@@ -346,12 +346,15 @@ void EmbreeAccel::intersect_finishing_terms(RTCRayHit& rayhit) const noexcept {
               triangle);
 }
 
+// Each form is compiled for the instruction set of the Embree kernels it stands for (chosen
+// only where Embree runs them): the fused multiply-adds and the estimate inline with the rest.
+#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2,fma"), flatten))
+#endif
 void EmbreeAccel::intersect_finishing_terms_12(RTCRayHit& rayhit) const noexcept {
     intersect_finishing_terms<&glue::embree_reciprocal_estimate_12>(rayhit);
 }
 
-// Compiled for AVX-512 (chosen only where Embree runs its AVX-512 kernels), so that the
-// 14-bit estimate inlines with the rest.
 #if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
 __attribute__((target("avx512f"), flatten))
 #endif

@@ -164,7 +164,7 @@ private:
     /// from the estimate `kEstimate` gives.
     template <float (*kEstimate)(float)>
     void intersect_finishing_terms(RTCRayHit& rayhit) const noexcept;
-    /// For Embree's AVX2 kernels (the 12-bit estimate).
+    /// For Embree's AVX2 kernels (the 12-bit estimate): compiled for AVX2 and FMA.
     void intersect_finishing_terms_12(RTCRayHit& rayhit) const noexcept;
     /// For its AVX-512 kernels (the 14-bit estimate): compiled for AVX-512.
     void intersect_finishing_terms_14(RTCRayHit& rayhit) const noexcept;
