@@ -188,8 +188,8 @@ void expect_same_attribute_bits(const glue::EmbreeHitAttributes& a,
 // The SIMD kernels' Möller test computes Embree's own terms when rays enter instances through
 // Embree's world-to-object maps: finishing them (embree_hit_attributes_from_terms, and its
 // inline form embree_fused_attributes_from_terms) gives what the full recomputation gives, bit
-// for bit, in both fused arithmetics. The portable kernels
-// and the watertight test give no terms.
+// for bit, in both fused arithmetics. The portable kernels and the watertight test give no
+// terms.
 TEST(EmbreeHitAttributes, TraversalTermsFinishToTheRecomputedAttributesBitForBit) {
     const Scene scene = make_default_scene();
     InstancedAccel accel = build_rebraid_accel(scene);
