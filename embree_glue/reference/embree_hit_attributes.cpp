@@ -188,24 +188,4 @@ std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
     return hit_attributes<SeparateOps>(world_ray, world_to_object, corners);
 }
 
-namespace {
-
-#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx512f"), flatten))
-#endif
-std::optional<EmbreeHitAttributes>
-attributes_from_terms_rcp14(const MollerTerms& terms) {
-    return attributes_from_terms<FusedRcp14Ops>(terms);
-}
-
-}  // namespace
-
-std::optional<EmbreeHitAttributes> embree_hit_attributes_from_terms(
-    const MollerTerms& terms, EmbreeKernelArithmetic arithmetic) {
-    if (arithmetic == EmbreeKernelArithmetic::fused_rcp14)
-        return attributes_from_terms_rcp14(terms);
-    if (arithmetic == EmbreeKernelArithmetic::fused) return attributes_from_terms<FusedOps>(terms);
-    return std::nullopt;
-}
-
 }  // namespace rebraid::glue

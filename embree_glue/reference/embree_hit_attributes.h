@@ -111,14 +111,12 @@ std::optional<EmbreeHitAttributes> embree_hit_attributes(const Ray& world_ray,
 /// in (world space for a triangle geometry of the root scene; for an instance, the ray mapped
 /// with embree_world_to_object's map, InstancedAccel::set_world_to_object), so only the
 /// division remains: Embree's reciprocal of |n.dir| times each term. The same results as
-/// embree_hit_attributes on that hit, at a fraction of its cost. nullopt for the `separate`
-/// arithmetic (whose unfused rounding the traversal does not share) and where a result is
-/// not finite.
-std::optional<EmbreeHitAttributes> embree_hit_attributes_from_terms(
-    const MollerTerms& terms, EmbreeKernelArithmetic arithmetic);
-/// The same in a fused arithmetic, inline for a caller on every ray's path that computed the
-/// estimate of 1 / terms.abs_den the arithmetic starts from (embree_reciprocal_estimate_12
-/// for fused, embree_reciprocal_estimate_14 for fused_rcp14).
+/// embree_hit_attributes on that hit, at a fraction of its cost. Only for the fused
+/// arithmetics (the `separate` one's unfused rounding the traversal does not share); nullopt
+/// where a result is not finite. `estimate`: the estimate of 1 / terms.abs_den the arithmetic
+/// starts from (embree_reciprocal_estimate_12 for fused, embree_reciprocal_estimate_14 for
+/// fused_rcp14), computed by the caller, which is compiled for its instruction set so that all of
+/// this inlines on every ray's path.
 inline std::optional<EmbreeHitAttributes> embree_fused_attributes_from_terms(
     const MollerTerms& terms, float estimate) {
     return embree_attributes_from_reciprocal(terms,
