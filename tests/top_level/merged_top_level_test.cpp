@@ -74,9 +74,9 @@ Scene world_space_scene(std::uint32_t* ground = nullptr) {
                              false, ground);
 }
 
-InstancedAccel rebraided(const Scene& scene, bool merge, bool merge_placed = false,
-                         float placed_node_budget = 100.0f,
-                         float items_out_of_line_area_share = 0.5f) {
+InstancedAccel rebraided(
+    const Scene& scene, bool merge, bool merge_placed = false, float placed_node_budget = 100.0f,
+    float items_out_of_line_area_share = RebraidSettings{}.merge_items_out_of_line_area_share) {
     RebraidSettings settings;
     settings.merge_world_space = merge;
     settings.merge_placed_instances = merge_placed;
