@@ -28,8 +28,9 @@ enum class EmbreeAccelObjectBuilder {
 struct EmbreeAccelSettings {
     /// Which builder makes the object BVHs.
     EmbreeAccelObjectBuilder object_builder = EmbreeAccelObjectBuilder::own;
-    /// The project's builder, when `object_builder` is own.
-    BuildSettings own_builder{};
+    /// The project's builder, when `object_builder` is own (with spatial splits; update()
+    /// refits, rotates and rebuilds as object_update says).
+    BuildSettings own_builder = static_object_build_settings();
     /// rtcBuildBVH, when `object_builder` is embree.
     glue::EmbreeBvhBuilderSettings embree_builder{};
     /// The re-braided top level. Every mesh keeps its object space

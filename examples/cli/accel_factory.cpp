@@ -26,8 +26,15 @@ TriangleTest triangle_test_of(const AccelOptions& options) {
     return options.is_robust ? TriangleTest::watertight : TriangleTest::moller;
 }
 
+/// The own builder's settings `options` asks for.
+BuildSettings own_build_settings(const AccelOptions& options) {
+    BuildSettings settings = static_object_build_settings();
+    settings.spatial_split_budget = options.spatial_split_budget;
+    return settings;
+}
+
 std::unique_ptr<Accel> build_flat(const Scene& scene, const AccelOptions& options) {
-    auto accel = std::make_unique<FlatAccel>(scene);
+    auto accel = std::make_unique<FlatAccel>(scene, own_build_settings(options));
     accel->set_triangle_test(triangle_test_of(options));
     return accel;
 }
@@ -40,15 +47,16 @@ std::unique_ptr<Accel> build_embree(const Scene& scene, const AccelOptions& opti
 }
 
 std::unique_ptr<Accel> build_two_level(const Scene& scene, const AccelOptions& options) {
-    auto accel = std::make_unique<InstancedAccel>(
-        build_two_level_accel(scene, make_object_builder(options.object_builder)));
+    auto accel = std::make_unique<InstancedAccel>(build_two_level_accel(
+        scene, make_object_builder(options.object_builder, own_build_settings(options))));
     accel->set_triangle_test(triangle_test_of(options));
     return accel;
 }
 
 std::unique_ptr<Accel> build_rebraid(const Scene& scene, const AccelOptions& options) {
-    auto accel = std::make_unique<InstancedAccel>(
-        build_rebraid_accel(scene, make_object_builder(options.object_builder), options.rebraid));
+    auto accel = std::make_unique<InstancedAccel>(build_rebraid_accel(
+        scene, make_object_builder(options.object_builder, own_build_settings(options)),
+        options.rebraid));
     accel->set_triangle_test(triangle_test_of(options));
     return accel;
 }
@@ -56,15 +64,15 @@ std::unique_ptr<Accel> build_rebraid(const Scene& scene, const AccelOptions& opt
 // Adding a structure to the command line is one line here.
 constexpr std::array kAccelTable{
     AccelEntry{"embree-flat", "Embree, every instance's triangles in one world-space scene",
-               &build_embree<glue::EmbreeFlatAccel>, false, false, true},
+               &build_embree<glue::EmbreeFlatAccel>, false, false, true, false},
     AccelEntry{"embree-instanced", "Embree, one scene per mesh plus one instance per instance",
-               &build_embree<glue::EmbreeInstancedAccel>, false, false, true},
+               &build_embree<glue::EmbreeInstancedAccel>, false, false, true, false},
     AccelEntry{"flat", "one BVH over every instance's triangles in world space (no instancing)",
-               &build_flat, false, false, true},
+               &build_flat, false, false, true, true},
     AccelEntry{"twolevel", "object BVHs plus a binned-SAH top level over the instances",
-               &build_two_level, true, false, true},
+               &build_two_level, true, false, true, true},
     AccelEntry{"rebraid", "object BVHs plus a re-braided top level (Benthin et al. 2017)",
-               &build_rebraid, true, true, true},
+               &build_rebraid, true, true, true, true},
 };
 
 constexpr std::array kObjectBuilderKinds{ObjectBuilderKind::own, ObjectBuilderKind::embree_high,
@@ -260,17 +268,28 @@ const std::vector<VariantKey>& variant_keys() {
                   {"1", true}, {"0", false}, {"true", true}, {"false", false}});
           },
           [](const AccelOptions& a, const AccelOptions& b) { return a.is_robust == b.is_robust; }}},
+        {"spatial-splits",
+         {[](const VariantValue& value, AccelOptions& options) {
+              options.spatial_split_budget = value.number();
+              if (!(options.spatial_split_budget >= 0.0f && options.spatial_split_budget <= 4.0f))
+                  value.fail("not a fraction of the triangles in [0, 4]");
+          },
+          [](const AccelOptions& a, const AccelOptions& b) {
+              return a.spatial_split_budget == b.spatial_split_budget;
+          }}},
     };
     return keys;
 }
 
 constexpr std::string_view kObjectBuilderKey = "object-builder";
 constexpr std::string_view kRobustKey = "robust";
+constexpr std::string_view kSpatialSplitsKey = "spatial-splits";
 
 /// Which structures a variant key changes: AccelEntry's flag for it.
 bool AccelEntry::*structures_using(std::string_view key) {
     if (key == kObjectBuilderKey) return &AccelEntry::has_object_bvhs;
     if (key == kRobustKey) return &AccelEntry::has_robust_mode;
+    if (key == kSpatialSplitsKey) return &AccelEntry::has_own_triangle_bvhs;
     return &AccelEntry::has_rebraid_settings;
 }
 
@@ -349,10 +368,10 @@ std::span<const ObjectBuilderKind> object_builder_kinds() {
     return kObjectBuilderKinds;
 }
 
-ObjectBvhBuilder make_object_builder(ObjectBuilderKind kind) {
+ObjectBvhBuilder make_object_builder(ObjectBuilderKind kind, const BuildSettings& own_settings) {
     switch (kind) {
         case ObjectBuilderKind::own:
-            return own_object_bvh_builder();
+            return own_object_bvh_builder(own_settings);
         case ObjectBuilderKind::embree_high:
             // High quality differs from medium only through spatial splits (see
             // EmbreeBvhBuilderSettings), so "embree-high" means them.

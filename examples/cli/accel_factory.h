@@ -42,6 +42,10 @@ struct AccelOptions {
     /// Embree application that sets no scene flags: the benchmarks compare with Embree as it
     /// runs by default, and the project's structures then run the Möller test as Embree does.
     bool is_robust = false;
+    /// Room for spatial splits in the project's own triangle BVHs (`flat`, and the object
+    /// BVHs of `twolevel` and `rebraid` from the own builder), as a fraction of the triangles
+    /// (BuildSettings::spatial_split_budget; `flat:spatial-splits=0` turns them off).
+    float spatial_split_budget = kStaticSpatialSplitBudget;
 };
 
 /// The `--opening` name of `rule` ("extent", "sah", "overlap").
@@ -62,8 +66,9 @@ std::string_view object_builder_name(ObjectBuilderKind kind);
 /// Every ObjectBuilderKind, in the order `--help` lists them.
 std::span<const ObjectBuilderKind> object_builder_kinds();
 
-/// The ObjectBvhBuilder `kind` stands for.
-ObjectBvhBuilder make_object_builder(ObjectBuilderKind kind);
+/// The ObjectBvhBuilder `kind` stands for; the own builder with `own_settings`.
+ObjectBvhBuilder make_object_builder(
+    ObjectBuilderKind kind, const BuildSettings& own_settings = static_object_build_settings());
 
 /// One structure the command line can build: its `--accel` name and how to build it.
 struct AccelEntry {
@@ -76,6 +81,9 @@ struct AccelEntry {
     bool has_rebraid_settings = false;
     /// True when AccelOptions::is_robust changes the structure.
     bool has_robust_mode = false;
+    /// True when AccelOptions::spatial_split_budget changes the structure (its triangle BVHs
+    /// come from the own builder).
+    bool has_own_triangle_bvhs = false;
 };
 
 /// Every structure `--accel` accepts, in the order `--help` lists them.

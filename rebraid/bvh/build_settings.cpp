@@ -36,6 +36,11 @@ void BuildSettings::validate() const {
         throw Error(
             "BuildSettings: fill_nodes needs collapse greedy (the optimal collapse keeps "
             "the SAH's leaves)");
+    if (!(spatial_split_budget >= 0.0f) || !(spatial_split_budget <= 4.0f))
+        throw Error("BuildSettings: spatial_split_budget " + std::to_string(spatial_split_budget) +
+                    " is outside 0..4");
+    if (spatial_split_budget > 0.0f && collapse != NodeCollapse::optimal)
+        throw Error("BuildSettings: spatial_split_budget needs collapse optimal");
     if (task_threshold < 1)
         throw Error("BuildSettings: task_threshold " + std::to_string(task_threshold) +
                     " must be >= 1");

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include "rebraid/bvh/object_subtree_counts.h"
+#include "rebraid/bvh/spatial_split_bvh_builder.h"
 #include "rebraid/bvh/wide_bvh_builder.h"
 #include "rebraid/core/build_timer.h"
 #include "rebraid/core/huge_pages.h"
@@ -51,6 +52,13 @@ ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> le
 
 ObjectBvh build_object_bvh(const Mesh& mesh, const BuildSettings& settings) {
     const BuildTimer timer;
+    if (settings.spatial_split_budget > 0.0f) {
+        SpatialSplitBvh built = build_spatial_split_bvh(mesh, settings);
+        ObjectBvh bvh = make_object_bvh(mesh, std::move(built.tree), std::move(built.leaf_prims),
+                                        settings.pre_arranged_leaves);
+        bvh.build_ms = timer.elapsed_ms();
+        return bvh;
+    }
     std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
     WideBvh tree = build_wide_bvh(prims, settings);
     std::vector<PrimId> leaf_prims(prims.size());

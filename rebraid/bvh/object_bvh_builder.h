@@ -11,7 +11,9 @@
 
 namespace rebraid {
 
-/// Builds an ObjectBvh with the project's parallel binned-SAH builder.
+/// Builds an ObjectBvh with the project's parallel binned-SAH builder; with spatial splits when
+/// settings.spatial_split_budget > 0 (spatial_split_bvh_builder.h), a triangle then in each
+/// leaf that holds a part of it.
 ObjectBvh build_object_bvh(const Mesh& mesh, const BuildSettings& settings = {});
 
 /// Completes an ObjectBvh from a tree whose leaves index `leaf_prims` (primIDs of `mesh` in
@@ -27,8 +29,10 @@ std::vector<BuildPrim> make_triangle_build_prims(const Mesh& mesh);
 /// Embree's rtcBuildBVH. Must be callable from several threads at once.
 using ObjectBvhBuilder = std::function<ObjectBvh(const Mesh&)>;
 
-/// The project's binned-SAH builder with `settings`.
-ObjectBvhBuilder own_object_bvh_builder(const BuildSettings& settings = {});
+/// The project's binned-SAH builder with `settings` (by default those of BVHs built once, with
+/// spatial splits).
+ObjectBvhBuilder own_object_bvh_builder(
+    const BuildSettings& settings = static_object_build_settings());
 
 /// One ObjectBvh per mesh of `scene` (index = MeshId), built in parallel.
 std::vector<ObjectBvh> build_object_bvhs(const Scene& scene, const ObjectBvhBuilder& builder);

@@ -39,8 +39,8 @@ struct DynamicSceneAccelSettings {
     DynamicTop top = DynamicTop::rebraid_incremental;
     /// How the BVHs of deforming meshes follow them (one updater per dynamic mesh).
     ObjectBvhUpdateSettings update;
-    /// Builder of the static meshes' BVHs (built once).
-    BuildSettings static_build;
+    /// Builder of the static meshes' BVHs (built once: with spatial splits).
+    BuildSettings static_build = static_object_build_settings();
     /// When set, builds the static meshes' BVHs instead of the project's builder with
     /// static_build: they are built once, so a slower builder of better trees (Embree's with
     /// spatial splits, embree_glue/reference/embree_bvh_builder.h) pays for itself over the frames.

@@ -260,7 +260,9 @@ struct RebraidInputs {
     std::vector<InstanceId> seeded;
     std::vector<BBox3f> seed_bounds;
     std::vector<double> seed_cost;
-    std::uint64_t primitive_count = 0;  ///< triangles of the seeded instances
+    /// Triangle references of the seeded instances' object BVHs (a triangle cut by spatial
+    /// splits once per part: each can become a BRef of its own).
+    std::uint64_t primitive_count = 0;
 };
 
 RebraidInputs rebraid_inputs(const Scene& scene, std::span<const ObjectBvh> object_bvhs,

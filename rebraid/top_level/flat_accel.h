@@ -19,7 +19,8 @@ struct TraceKernels;
 /// reference (and the memory cost two-level structures avoid).
 class FlatAccel final : public Accel {
 public:
-    explicit FlatAccel(const Scene& scene, const BuildSettings& settings = {});
+    explicit FlatAccel(const Scene& scene,
+                       const BuildSettings& settings = static_object_build_settings());
 
     Hit intersect_counted(const Ray& ray, TraversalCounters* counters) const override;
     bool occluded(const Ray& ray) const override;

@@ -196,8 +196,9 @@ TEST(RebraidBuilder, InstanceSubsetReachesExactlyItsInstances) {
     EXPECT_GT(build.opened, 0u);
     const InstancedAccel accel(scene, bvhs, std::move(build.top), {});
     const test::ReachCounts counts = test::reach_counts(scene, accel);
-    for (std::size_t i = 0; i < counts.size(); ++i)
-        for (const int count : counts[i]) ASSERT_EQ(count, int(i % 2)) << "instance " << i;
+    for (std::size_t i = 0; i < counts.reached.size(); ++i)
+        for (std::size_t p = 0; p < counts.reached[i].size(); ++p)
+            ASSERT_EQ(counts.reached[i][p], i % 2 == 1 ? counts.held[i][p] : 0) << "instance " << i;
     // A subset of every instance in scene order is the ordinary build.
     std::vector<InstanceId> all(scene.instances.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = InstanceId(i);

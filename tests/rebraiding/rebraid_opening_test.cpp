@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -36,6 +37,24 @@
 
 namespace rebraid {
 namespace {
+
+/// The budget of `settings` with both rules' budgets doubled `doublings` times, as the budget
+/// search grows them (rounded as bref_budget rounds each rule).
+std::uint64_t doubled_budget(RebraidSettings settings, const Scene& scene, std::uint64_t references,
+                             int doublings) {
+    const float factor = std::ldexp(1.0f, doublings);
+    settings.budget_factor *= factor;
+    settings.primitives_per_bref = std::max(1.0f, settings.primitives_per_bref / factor);
+    return bref_budget(settings, scene.instances.size(), references);
+}
+
+/// The triangle references the instances' object BVHs hold (a triangle cut by spatial splits
+/// once per part): what the budget rules count.
+std::uint64_t instanced_reference_count(const Scene& scene, std::span<const ObjectBvh> bvhs) {
+    std::uint64_t count = 0;
+    for (const Instance& instance : scene.instances) count += bvhs[instance.mesh_id].prim_count();
+    return count;
+}
 
 struct NamedSettings {
     std::string name;
@@ -449,10 +468,12 @@ TEST(RebraidOpening, BudgetSearchStopsWhenADoublingGainsTooLittle) {
             return build_rebraid(scene, bvhs, settings);
         };
         const std::uint64_t rule_budget =
-            bref_budget(base, scene.instances.size(), scene.instanced_triangle_count());
+            bref_budget(base, scene.instances.size(), instanced_reference_count(scene, bvhs));
         // One doubling allowed: the stop rule has nothing left to stop.
         const RebraidBuild one_doubling = search(1, 0.0f);
-        ASSERT_EQ(one_doubling.budget, 2 * rule_budget) << "the first doubling should pay here";
+        ASSERT_EQ(one_doubling.budget,
+                  doubled_budget(base, scene, instanced_reference_count(scene, bvhs), 1))
+            << "the first doubling should pay here";
         // No least gain: the first doubling lowers the cost, so the search goes on to the
         // largest budget, a cheaper top than one doubling finds.
         const RebraidBuild unhindered = search(8, 0.0f);
@@ -486,7 +507,7 @@ TEST(RebraidOpening, BudgetSearchDoublesBeyondTheLargestWhileEachDoublingPays) {
         return build_rebraid(scene, bvhs, settings);
     };
     const std::uint64_t rule_budget =
-        bref_budget(base, scene.instances.size(), scene.instanced_triangle_count());
+        bref_budget(base, scene.instances.size(), instanced_reference_count(scene, bvhs));
     // No doubling beyond the second: the search ends at x4, where it pays here.
     const RebraidBuild at_largest = search(kNeverBeyond);
     ASSERT_GT(at_largest.budget, 2 * rule_budget) << "x4 should pay here";
@@ -533,7 +554,9 @@ TEST(RebraidOpening, BudgetSearchDoublesOnlyABudgetSpentInFull) {
               structure_hash_of(scene, bvhs, RebraidBuild(first).top));
     // Asked for a little less: the doubled build is tried and, cheaper here, kept.
     const RebraidBuild doubled = search_with_min_use(used - 0.01);
-    EXPECT_EQ(doubled.budget, 2 * first.budget);
+    EXPECT_EQ(doubled.budget,
+              doubled_budget(once, scene, instanced_reference_count(scene, bvhs), 1));
+    EXPECT_GE(doubled.budget, 2 * first.budget);
     EXPECT_THROW((RebraidSettings{.budget_search_min_gain = -0.1f}.validate()), Error);
     EXPECT_THROW((RebraidSettings{.budget_search_min_gain = 1.0f}.validate()), Error);
     EXPECT_THROW((RebraidSettings{.budget_search_min_use = 1.5f}.validate()), Error);

@@ -1,7 +1,9 @@
 #pragma once
 
 // Counting how often each (instance, primitive) pair is reachable from the root of a
-// structure: every triangle of every instance must be reachable exactly once.
+// structure: every triangle of every instance must be reachable, each of its references in
+// the BVH that holds it exactly once (a triangle cut by spatial splits has a reference in each
+// leaf that holds a part of it; others have one).
 
 #include <gtest/gtest.h>
 
@@ -26,12 +28,18 @@ void for_each_leaf(std::span<const WideNode> nodes, NodeRef ref, Visit&& visit) 
     for (NodeRef child : nodes[ref.node_id()].children) for_each_leaf(nodes, child, visit);
 }
 
-using ReachCounts = std::vector<std::vector<int>>;  // [instance][primID]
+/// Per instance and primID: how often the structure reaches the triangle, and how many
+/// references to it the BVH it is traced in holds.
+struct ReachCounts {
+    std::vector<std::vector<int>> reached, held;  // [instance][primID]
+};
 
 inline ReachCounts empty_counts(const Scene& scene) {
-    ReachCounts counts(scene.instances.size());
+    ReachCounts counts;
+    counts.reached.resize(scene.instances.size());
     for (std::size_t i = 0; i < scene.instances.size(); ++i)
-        counts[i].assign(scene.meshes[scene.instances[i].mesh_id].triangles.size(), 0);
+        counts.reached[i].assign(scene.meshes[scene.instances[i].mesh_id].triangles.size(), 0);
+    counts.held = counts.reached;
     return counts;
 }
 
@@ -44,10 +52,13 @@ inline ReachCounts reach_counts(const Scene& scene, const InstancedAccel& accel)
             const ObjectBvh& bvh = accel.object_bvhs()[accel.instance_meshes()[item.instance_id]];
             for_each_leaf(bvh.nodes, item.object_node, [&](NodeRef object_leaf) {
                 for (std::uint32_t p = 0; p < object_leaf.prim_count(); ++p)
-                    ++counts[item.instance_id][bvh.prim_ids[object_leaf.first_prim() + p]];
+                    ++counts.reached[item.instance_id][bvh.prim_ids[object_leaf.first_prim() + p]];
             });
         }
     });
+    for (std::size_t i = 0; i < scene.instances.size(); ++i)
+        for (const PrimId prim : accel.object_bvhs()[accel.instance_meshes()[i]].prim_ids)
+            ++counts.held[i][prim];
     return counts;
 }
 
@@ -57,18 +68,23 @@ inline ReachCounts reach_counts(const Scene& scene, const FlatAccel& accel) {
     for_each_leaf(bvh.nodes, bvh.root, [&](NodeRef leaf) {
         for (std::uint32_t p = 0; p < leaf.prim_count(); ++p) {
             const PrimId world = bvh.prim_ids[leaf.first_prim() + p];
-            ++counts[accel.triangle_instances()[world]][accel.triangle_prims()[world]];
+            ++counts.reached[accel.triangle_instances()[world]][accel.triangle_prims()[world]];
         }
     });
+    for (const PrimId world : bvh.prim_ids)
+        ++counts.held[accel.triangle_instances()[world]][accel.triangle_prims()[world]];
     return counts;
 }
 
+/// Every triangle held at least once, and reached once per reference.
 inline void expect_each_reached_once(const ReachCounts& counts) {
     std::size_t wrong = 0;
-    for (std::size_t i = 0; i < counts.size(); ++i)
-        for (std::size_t p = 0; p < counts[i].size(); ++p)
-            if (counts[i][p] != 1 && ++wrong <= 5)
-                ADD_FAILURE() << "instance " << i << " prim " << p << " reached " << counts[i][p]
+    for (std::size_t i = 0; i < counts.reached.size(); ++i)
+        for (std::size_t p = 0; p < counts.reached[i].size(); ++p)
+            if ((counts.held[i][p] < 1 || counts.reached[i][p] != counts.held[i][p]) &&
+                ++wrong <= 5)
+                ADD_FAILURE() << "instance " << i << " prim " << p << " reached "
+                              << counts.reached[i][p] << " times, held " << counts.held[i][p]
                               << " times";
     EXPECT_EQ(wrong, 0u);
 }

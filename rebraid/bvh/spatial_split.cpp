@@ -1,0 +1,147 @@
+#include "rebraid/bvh/spatial_split.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace rebraid {
+namespace {
+
+/// Most bins per axis a spatial split search uses.
+constexpr std::uint32_t kMaxSpatialBins = 64;
+
+/// References per block of a parallel binning; fixed, so the blocks never depend on threads.
+constexpr std::size_t kBinningBlock = 4096;
+
+/// Per axis and bin: the boxes of the parts falling in the bin, and how many references
+/// start (entries) and end (exits) in it.
+struct SpatialBins {
+    std::uint32_t bin_count = 0;
+    BBox3f boxes[3][kMaxSpatialBins];
+    std::uint32_t entries[3][kMaxSpatialBins] = {};
+    std::uint32_t exits[3][kMaxSpatialBins] = {};
+
+    void merge(const SpatialBins& other) {
+        for (int a = 0; a < 3; ++a)
+            for (std::uint32_t b = 0; b < bin_count; ++b) {
+                boxes[a][b].extend(other.boxes[a][b]);
+                entries[a][b] += other.entries[a][b];
+                exits[a][b] += other.exits[a][b];
+            }
+    }
+};
+
+/// How the bins of each axis are laid out over the range's box.
+struct SpatialBinLayout {
+    std::uint32_t bin_count = 0;
+    SpatialSplit axes[3];  ///< per axis: origin, width, inverse width (axis -1: not binned)
+};
+
+void bin_references(std::span<const BuildPrim> refs, const Mesh& mesh,
+                    const SpatialBinLayout& layout, SpatialBins& bins) {
+    for (const BuildPrim& ref : refs) {
+        const std::array<Vec3f, 3> triangle = mesh.corners(PrimId(ref.id));
+        for (int a = 0; a < 3; ++a) {
+            const SpatialSplit& axis = layout.axes[a];
+            if (axis.axis < 0) continue;
+            const std::uint32_t first = axis.bin_of(ref.bounds.min[a]);
+            const std::uint32_t last = axis.bin_of(ref.bounds.max[a]);
+            ++bins.entries[a][first];
+            ++bins.exits[a][last];
+            BBox3f rest = ref.bounds;
+            // Chop the part off bin by bin; the last bin takes what is left.
+            for (std::uint32_t b = first; b < last; ++b) {
+                BBox3f left, right;
+                split_triangle_box(triangle, rest, a, axis.plane_of(b + 1), left, right);
+                bins.boxes[a][b].extend(left);
+                rest = right;
+            }
+            bins.boxes[a][last].extend(rest);
+        }
+    }
+}
+
+}  // namespace
+
+SpatialSplit find_spatial_split(std::span<const BuildPrim> refs, const BBox3f& bounds,
+                                const Mesh& mesh, std::uint32_t bin_count,
+                                std::uint32_t max_duplicates, std::size_t parallel_threshold) {
+    SpatialSplit best;
+    bin_count = std::clamp(bin_count, 2u, kMaxSpatialBins);
+    if (refs.size() < 2) return best;
+    SpatialBinLayout layout;
+    layout.bin_count = bin_count;
+    bool any_axis = false;
+    for (int a = 0; a < 3; ++a) {
+        const float extent = bounds.max[a] - bounds.min[a];
+        SpatialSplit& axis = layout.axes[a];
+        if (!(extent > 0.0f) || !std::isfinite(extent)) continue;
+        axis.axis = a;
+        axis.origin = bounds.min[a];
+        axis.width = extent / float(bin_count);
+        axis.inverse_width = float(bin_count) / extent;
+        axis.bin_count = bin_count;
+        // A plane that rounding puts on the box's own edge splits nothing.
+        if (!(axis.width > 0.0f) || !std::isfinite(axis.inverse_width)) {
+            axis.axis = -1;
+            continue;
+        }
+        any_axis = true;
+    }
+    if (!any_axis) return best;
+
+    SpatialBins bins;
+    bins.bin_count = bin_count;
+    if (refs.size() < parallel_threshold) {
+        bin_references(refs, mesh, layout, bins);
+    } else {
+        const std::size_t blocks = (refs.size() + kBinningBlock - 1) / kBinningBlock;
+        std::vector<SpatialBins> partial(blocks);
+        tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t block) {
+            partial[block].bin_count = bin_count;
+            const std::size_t begin = block * kBinningBlock;
+            const std::size_t end = std::min(refs.size(), begin + kBinningBlock);
+            bin_references(refs.subspan(begin, end - begin), mesh, layout, partial[block]);
+        });
+        for (const SpatialBins& part : partial) bins.merge(part);
+    }
+
+    const auto count = std::uint32_t(refs.size());
+    for (int a = 0; a < 3; ++a) {
+        if (layout.axes[a].axis < 0) continue;
+        // Sweep from the right: the box and reference count of bins [b, bin_count).
+        float right_area[kMaxSpatialBins];
+        std::uint32_t right_refs[kMaxSpatialBins];
+        BBox3f box;
+        std::uint32_t exits = 0;
+        for (std::uint32_t b = bin_count; b-- > 1;) {
+            box.extend(bins.boxes[a][b]);
+            exits += bins.exits[a][b];
+            right_area[b] = box.half_area();
+            right_refs[b] = exits;
+        }
+        box = BBox3f{};
+        std::uint32_t entries = 0;
+        for (std::uint32_t b = 1; b < bin_count; ++b) {
+            box.extend(bins.boxes[a][b - 1]);
+            entries += bins.entries[a][b - 1];
+            const std::uint32_t left_refs = entries;
+            if (left_refs == 0 || right_refs[b] == 0) continue;
+            if (left_refs + right_refs[b] > count + max_duplicates) continue;
+            const float cost =
+                box.half_area() * float(left_refs) + right_area[b] * float(right_refs[b]);
+            if (cost < best.cost) {
+                best = layout.axes[a];
+                best.bin = b;
+                best.left_count = left_refs;
+                best.right_count = right_refs[b];
+                best.cost = cost;
+            }
+        }
+    }
+    return best;
+}
+
+}  // namespace rebraid

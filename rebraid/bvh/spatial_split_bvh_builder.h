@@ -1,0 +1,32 @@
+#pragma once
+
+#include <vector>
+
+#include "rebraid/bvh/build_settings.h"
+#include "rebraid/bvh/wide_bvh.h"
+#include "rebraid/core/scene.h"
+#include "rebraid/core/types.h"
+
+namespace rebraid {
+
+/// A wide BVH whose leaves index `leaf_prims`: the triangles in leaf order, a triangle cut by
+/// spatial splits listed once in each leaf that holds a part of it.
+struct SpatialSplitBvh {
+    WideBvh tree;
+    std::vector<PrimId> leaf_prims;
+};
+
+/// The binned-SAH build of build_wide_bvh over the triangles of `mesh`, where each range also
+/// weighs a spatial split (spatial_split.h) against the object split and takes the cheaper
+/// (Stich et al. 2009). The references live in one array of the triangle count plus
+/// `settings.spatial_split_budget` times as many more, divided into segments: a range owns its
+/// references and the room after them, spends that room on the duplicates of its spatial
+/// splits, and hands what is left to its two halves in proportion to their reference counts
+/// (the re-braiding paper's budgeted segments, §5.2, which Embree's spatial-split builder
+/// shares), so the tree depends on the input and the settings only, never on the threads.
+/// Nodes are cut from the binary tree as `settings.collapse` says (optimal only).
+/// Precondition: settings.spatial_split_budget > 0 and settings.collapse ==
+/// NodeCollapse::optimal (BuildSettings::validate).
+SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& settings);
+
+}  // namespace rebraid
