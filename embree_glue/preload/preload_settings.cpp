@@ -35,6 +35,7 @@ EmbreeAccelSettings accel_settings(const std::string& spec) {
                     "settings: rebraid:KEY=VALUE...)");
     EmbreeAccelSettings settings;
     settings.rebraid = variant.options.rebraid;
+    settings.own_builder.spatial_split_budget = variant.options.spatial_split_budget;
     switch (variant.options.object_builder) {
         case cli::ObjectBuilderKind::own:
             settings.object_builder = EmbreeAccelObjectBuilder::own;

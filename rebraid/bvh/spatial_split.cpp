@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace rebraid {
@@ -39,6 +40,66 @@ struct SpatialBinLayout {
     SpatialSplit axes[3];  ///< per axis: origin, width, inverse width (axis -1: not binned)
 };
 
+/// Extends `boxes[b]`, for each bin b from `first` to `last` along `axis`, by the box of the part
+/// of `triangle` within `box` in that bin. The part in a slab between two planes is a convex
+/// polygon whose corners are the triangle's corners inside the slab and the points where its
+/// edges cross the two planes; with the corners sorted along the axis, each plane is crossed
+/// by the edge from the lowest to the highest corner and by one of the other two. So each
+/// plane costs two points, where chopping the part off bin by bin (split_triangle_box) clipped
+/// all three edges again for every bin.
+void bin_triangle_parts(const std::array<Vec3f, 3>& triangle, const BBox3f& box,
+                        const SpatialSplit& axis, std::uint32_t first, std::uint32_t last,
+                        BBox3f* boxes) {
+    const int a = axis.axis;
+    std::array<Vec3f, 3> sorted = triangle;
+    if (sorted[1][a] < sorted[0][a]) std::swap(sorted[0], sorted[1]);
+    if (sorted[2][a] < sorted[1][a]) std::swap(sorted[1], sorted[2]);
+    if (sorted[1][a] < sorted[0][a]) std::swap(sorted[0], sorted[1]);
+    const Vec3f &low = sorted[0], &middle = sorted[1], &high = sorted[2];
+    // The crossings carry rounding: widen them by a few ulps of the box's coordinates' size.
+    float size = 0.0f;
+    for (int i = 0; i < 3; ++i)
+        size = std::max({size, std::fabs(box.min[i]), std::fabs(box.max[i])});
+    const float slack = 0x1p-21f * size + 0x1p-126f;
+    const auto point_on = [&](const Vec3f& from, const Vec3f& to, float plane) {
+        const float span = to[a] - from[a];
+        const float t = span > 0.0f ? std::clamp((plane - from[a]) / span, 0.0f, 1.0f) : 0.0f;
+        Vec3f point = from + (to - from) * t;
+        point[a] = plane;
+        return point;
+    };
+    // The box of a plane's two crossings, widened.
+    const auto crossings = [&](float plane) {
+        BBox3f crossed;
+        crossed.extend(point_on(low, high, plane));
+        crossed.extend(plane < middle[a] ? point_on(low, middle, plane)
+                                         : point_on(middle, high, plane));
+        for (int i = 0; i < 3; ++i) {
+            if (i == a) continue;
+            crossed.min[i] -= slack;
+            crossed.max[i] += slack;
+        }
+        return crossed;
+    };
+    BBox3f lower;  // the crossings of the bin's lower plane (none for the first bin)
+    for (std::uint32_t b = first; b <= last; ++b) {
+        BBox3f part = lower;
+        const float bottom =
+            b == first ? -std::numeric_limits<float>::infinity() : axis.plane_of(b);
+        const float top = b == last ? std::numeric_limits<float>::infinity() : axis.plane_of(b + 1);
+        if (b < last) {
+            lower = crossings(top);
+            part.extend(lower);
+        }
+        for (const Vec3f& corner : sorted)
+            if (corner[a] >= bottom && corner[a] <= top) part.extend(corner);
+        part = intersection(part, box);
+        part.min[a] = std::max(part.min[a], bottom);
+        part.max[a] = std::min(part.max[a], top);
+        if (!part.is_empty()) boxes[b].extend(part);
+    }
+}
+
 void bin_references(std::span<const BuildPrim> refs, const Mesh& mesh,
                     const SpatialBinLayout& layout, SpatialBins& bins) {
     for (const BuildPrim& ref : refs) {
@@ -50,15 +111,10 @@ void bin_references(std::span<const BuildPrim> refs, const Mesh& mesh,
             const std::uint32_t last = axis.bin_of(ref.bounds.max[a]);
             ++bins.entries[a][first];
             ++bins.exits[a][last];
-            BBox3f rest = ref.bounds;
-            // Chop the part off bin by bin; the last bin takes what is left.
-            for (std::uint32_t b = first; b < last; ++b) {
-                BBox3f left, right;
-                split_triangle_box(triangle, rest, a, axis.plane_of(b + 1), left, right);
-                bins.boxes[a][b].extend(left);
-                rest = right;
-            }
-            bins.boxes[a][last].extend(rest);
+            if (first == last)
+                bins.boxes[a][first].extend(ref.bounds);
+            else
+                bin_triangle_parts(triangle, ref.bounds, axis, first, last, bins.boxes[a]);
         }
     }
 }

@@ -40,12 +40,16 @@ BBox3f bref_world_bounds(const ObjectBvh& bvh, NodeRef node, const BBox3f& node_
     if (rule == BRefBoundsRule::transformed_box || node.is_empty() ||
         to_world.maps_boxes_to_boxes())
         return to_world.transform_bbox_conservative(node_box);
-    if (node.is_leaf()) return transformed_leaf_bounds(bvh, node, to_world);
+    // A triangle that spatial splits cut sits in several leaves, each box holding only its
+    // part there: its vertices reach beyond the node, so the vertices' box is cut down to the
+    // node's mapped box (both hold the node's parts of its triangles).
+    const BBox3f mapped_box = to_world.transform_bbox_conservative(node_box);
+    if (node.is_leaf())
+        return intersection(transformed_leaf_bounds(bvh, node, to_world), mapped_box);
     if (rule == BRefBoundsRule::transformed_vertices) {
         if (const SupportTable* table = tables ? tables->find(node) : nullptr)
-            return intersection(table->table_world_bounds(to_world),
-                                to_world.transform_bbox_conservative(node_box));
-        return vertex_world_bounds(bvh, node, node_box, to_world);
+            return intersection(table->table_world_bounds(to_world), mapped_box);
+        return intersection(vertex_world_bounds(bvh, node, node_box, to_world), mapped_box);
     }
     const WideNode& wide = bvh.nodes[node.node_id()];
     BBox3f box;

@@ -94,7 +94,9 @@ void copy_subtree(MergedTopLevel& merged, const ObjectBvhView& bvh, std::uint32_
 /// the copied nodes below it world-space boxes: per leaf child the box of its triangles'
 /// corners mapped into the world, widened by 8 ulps of the mapping's terms as BRef boxes are
 /// (the box test in world space and the triangle test in object space round differently),
-/// per inner child the union of its children's. Returns the node's box.
+/// per inner child the union of its children's; a leaf's box cut down to its mapped
+/// object-space box, which alone holds no more than the parts of the triangles spatial splits
+/// cut. Returns the node's box.
 BBox3f fit_world_boxes(MergedTopLevel& merged, std::uint32_t id, const ObjectBvhView& bvh,
                        const AffineTransform& to_world) {
     BBox3f node_box;
@@ -114,7 +116,9 @@ BBox3f fit_world_boxes(MergedTopLevel& merged, std::uint32_t id, const ObjectBvh
                     for (int axis = 0; axis < 3; ++axis)
                         object_magnitude = std::max(object_magnitude, std::fabs(corner[axis]));
                 }
-            box = widen_for_mapping_rounding(box, to_world, object_magnitude, 8.0f);
+            box = intersection(
+                widen_for_mapping_rounding(box, to_world, object_magnitude, 8.0f),
+                to_world.transform_bbox_conservative(merged.nodes[id].child_bounds(slot)));
         }
         merged.nodes[id].set_child(slot, child, box);
         node_box.extend(box);
