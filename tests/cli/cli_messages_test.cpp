@@ -322,6 +322,25 @@ TEST(CliMessages, RobustModeIsASettingOfEveryStructure) {
                 4.0);
 }
 
+TEST(CliMessages, SpatialSplitsAreASettingOfTheOwnTriangleBvhs) {
+    // On by default: the cut triangles' extra references take memory.
+    const auto memory_of = [](const char* accel) {
+        const CommandResult stats = run_rebraid({"stats", "--accel", accel, "--json"});
+        EXPECT_EQ(stats.exit_code, 0) << stats.err;
+        return nlohmann::json::parse(stats.out).at("memory_bytes").get<double>();
+    };
+    EXPECT_GT(memory_of("flat"), memory_of("flat:spatial-splits=0"));
+    EXPECT_GT(memory_of("twolevel"), memory_of("twolevel:spatial-splits=0"));
+    expect_error(run_rebraid({"stats", "--accel", "embree-flat:spatial-splits=0"}),
+                 "embree-flat does not use spatial-splits; it is a setting of flat or twolevel or "
+                 "rebraid");
+    expect_error(run_rebraid({"stats", "--accel", "flat:spatial-splits=5"}),
+                 "accel 'flat:spatial-splits=5': spatial-splits=5: not a fraction of the "
+                 "triangles in [0, 4]");
+    expect_error(run_rebraid({"bench", "--accel", "flat,flat:spatial-splits=0.2"}),
+                 "accel 'flat' and 'flat:spatial-splits=0.2' build the same structure");
+}
+
 // ---- Outputs that explain themselves ---------------------------------------------------------
 
 TEST(CliMessages, StatsSaysWhatTheBudgetCountsAndWhyEmbreeHasNoSah) {

@@ -90,7 +90,7 @@ TEST(EmbreePreload, AccelSettingsFromTheEnvironmentGiveTheSameAnswers) {
     for (const char* settings :
          {"REBRAID_ACCEL=rebraid:opening=extent:bref-bounds=box",
           "REBRAID_ACCEL=rebraid:object-builder=embree-high:open-threshold=0.5",
-          "REBRAID_PRELOAD= REBRAID_ACCEL="}) {
+          "REBRAID_ACCEL=rebraid:spatial-splits=0", "REBRAID_PRELOAD= REBRAID_ACCEL="}) {
         SCOPED_TRACE(settings);
         const CommandResult preload =
             run_program(dir, "preload", preload_environment(settings), client_command("trace"));
