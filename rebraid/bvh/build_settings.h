@@ -76,9 +76,10 @@ struct BuildSettings {
 };
 
 /// Room for spatial splits in object BVHs built once (BuildSettings::spatial_split_budget):
-/// 20 % more references. On the shared scenes the own flat BVH traced 2-18 % more rays per
-/// second than without, the re-braided structure up to 11 % (two_cylinder_engine), for 10-20 %
-/// more memory and builds 2-3 times as long (docs/design.md, "Spatial splits").
+/// 20 % more references. On the shared and generated scenes the own flat BVH traced up to 16 %
+/// more rays per second than without, the re-braided structure between 4 % fewer and 10 % more
+/// (two_cylinder_engine), for 1-18 % more memory and builds 1.5-4.5 times as long
+/// (docs/design.md, "Spatial splits").
 inline constexpr float kStaticSpatialSplitBudget = 0.2f;
 
 /// The settings of object BVHs built once for geometry that stays as it is (`flat`, the
