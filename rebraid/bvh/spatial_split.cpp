@@ -11,7 +11,7 @@ namespace rebraid {
 namespace {
 
 /// Most bins per axis a spatial split search uses.
-constexpr std::uint32_t kMaxSpatialBins = 64;
+constexpr std::uint32_t kMaxSpatialBins = 16;
 
 /// References per block of a parallel binning; fixed, so the blocks never depend on threads.
 constexpr std::size_t kBinningBlock = 4096;
@@ -57,6 +57,8 @@ void bin_triangle_parts(const std::array<Vec3f, 3>& triangle, const BBox3f& box,
     if (sorted[1][a] < sorted[0][a]) std::swap(sorted[0], sorted[1]);
     const Vec3f &low = sorted[0], &middle = sorted[1], &high = sorted[2];
     // The crossings carry rounding: widen them by a few ulps of the box's coordinates' size.
+    // (These boxes only price the split; the boxes of the parts a split makes come from
+    // split_triangle_box.)
     float size = 0.0f;
     for (int i = 0; i < 3; ++i)
         size = std::max({size, std::fabs(box.min[i]), std::fabs(box.max[i])});

@@ -14,7 +14,7 @@
 namespace rebraid {
 
 /// A spatial split of a range of triangle references (Stich, Friedrich and Dietrich, "Spatial
-/// Splits in Bounding Volume Hierarchies", HPG 2009, §3): a plane across the range's box, the
+/// Splits in Bounding Volume Hierarchies", HPG 2009): a plane across the range's box, the
 /// references wholly on one side going there and those crossing it going to both sides, each
 /// side's copy bounded by the part of its triangle on that side. Where triangles are long or
 /// slanted, their boxes overlap whatever object split is chosen; cutting them lets the children's
@@ -93,8 +93,8 @@ inline void split_triangle_box(const std::array<Vec3f, 3>& triangle, const BBox3
 
 /// The best spatial split of `refs` (triangle references of `mesh`: BuildPrim::id names the
 /// triangle, BuildPrim::bounds the part of it the reference stands for) whose box is `bounds`,
-/// binned with `bin_count` bins per axis; only splits that send at least one reference to each
-/// side and add at most `max_duplicates` references are considered. Parallel in fixed blocks
+/// binned with `bin_count` bins per axis (2 to 16); only splits that send at least one reference to
+/// each side and add at most `max_duplicates` references are considered. Parallel in fixed blocks
 /// at or above `parallel_threshold` references; boxes and counts merge exactly, so the result
 /// never depends on the thread count.
 SpatialSplit find_spatial_split(std::span<const BuildPrim> refs, const BBox3f& bounds,

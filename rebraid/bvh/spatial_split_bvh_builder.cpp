@@ -57,8 +57,11 @@ public:
 
     SegmentCandidate evaluate(std::uint32_t begin, std::uint32_t end, std::uint32_t capacity_end,
                               bool in_scratch, const RangeInfo& info, bool median_only) const {
-        SegmentCandidate c{begin, end, capacity_end, info, info.bounds.half_area(),
-                           {},    {},  false,        true, in_scratch};
+        SegmentCandidate c;
+        c.begin = begin, c.end = end, c.capacity_end = capacity_end;
+        c.info = info;
+        c.half_area = info.bounds.half_area();
+        c.in_scratch = in_scratch;
         const std::uint32_t n = c.size();
         if (n <= 1) return c;
         if (!median_only) {
@@ -119,8 +122,8 @@ public:
 
 private:
     /// Whether the boxes of the object split's halves overlap by more than a small share of
-    /// the root's area (Stich et al. 2009, §4.1): only then can a spatial split be worth its
-    /// search, which clips every crossing triangle. The paper's share is 1e-5; 1e-3 built
+    /// the root's area (the criterion of Stich et al. 2009): only then can a spatial split be worth
+    /// its search, which clips every crossing triangle. The paper's share is 1e-5; 1e-3 built
     /// two_cylinder_engine and cg57_cruiser in half the time for an SAH within 0.1 and 0.6 %
     /// of it, and the drop-in's flattened grid (whose ground quad every lower split would cut
     /// again) in two thirds, at a lower SAH (docs/design.md, "Spatial splits").

@@ -22,11 +22,10 @@ struct SpatialSplitBvh {
 /// `settings.spatial_split_budget` times as many more, divided into segments: a range owns its
 /// references and the room after them, spends that room on the duplicates of its spatial
 /// splits, and hands what is left to its two halves in proportion to their reference counts
-/// (the re-braiding paper's budgeted segments, §5.2, which Embree's spatial-split builder
-/// shares), so the tree depends on the input and the settings only, never on the threads.
-/// Nodes are cut from the binary tree as `settings.collapse` says (optimal only).
-/// Precondition: settings.spatial_split_budget > 0 and settings.collapse ==
-/// NodeCollapse::optimal (BuildSettings::validate).
+/// (as the re-braiding paper's budgeted segments, §5.2), so the tree depends on the input and
+/// the settings only, never on the threads. Nodes are cut from the binary tree by the optimal
+/// collapse. Throws rebraid::Error unless settings.spatial_split_budget > 0 and
+/// settings.collapse == NodeCollapse::optimal (BuildSettings::validate).
 SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& settings);
 
 }  // namespace rebraid
