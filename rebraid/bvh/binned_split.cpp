@@ -329,4 +329,12 @@ SplitResult apply_binned_split_into(std::span<const BuildPrim> prims, std::span<
     });
 }
 
+SplitResult apply_split_in_or_across(std::span<BuildPrim> prims, std::span<BuildPrim> other,
+                                     const BinnedSplit& split, std::size_t parallel_threshold,
+                                     bool& moved) {
+    moved = !(split.is_exact() && prims.size() <= kMaxExactSplitPrims);
+    if (!moved) return apply_exact_split(prims, split);
+    return apply_binned_split_into(prims, other, split, parallel_threshold);
+}
+
 }  // namespace rebraid

@@ -105,4 +105,12 @@ SplitResult apply_binned_split(std::span<BuildPrim> prims, const BinnedSplit& sp
 SplitResult apply_binned_split_into(std::span<const BuildPrim> prims, std::span<BuildPrim> out,
                                     const BinnedSplit& split, std::size_t parallel_threshold);
 
+/// A split of `prims` for a builder that alternates two buffers: the tiny ranges of exact splits
+/// divided in place (switching buffers buys them nothing), the others partitioned into `other`
+/// (same size, distinct memory; no copying back), measuring both sides on the way. Sets
+/// `moved` to whether the prims now live in `other`. Precondition: split.is_valid().
+SplitResult apply_split_in_or_across(std::span<BuildPrim> prims, std::span<BuildPrim> other,
+                                     const BinnedSplit& split, std::size_t parallel_threshold,
+                                     bool& moved);
+
 }  // namespace rebraid

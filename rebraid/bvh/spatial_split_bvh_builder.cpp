@@ -10,7 +10,6 @@
 #include <vector>
 
 #include "rebraid/bvh/binned_split.h"
-#include "rebraid/bvh/exact_split.h"
 #include "rebraid/bvh/object_bvh_builder.h"
 #include "rebraid/bvh/optimal_wide_tree_grower.h"
 #include "rebraid/bvh/spatial_split.h"
@@ -93,13 +92,10 @@ public:
         SplitResult s;
         bool in_scratch = c.in_scratch;
         if (c.split.is_valid()) {
-            if (c.split.is_exact() && c.size() <= kMaxExactSplitPrims) {
-                s = apply_exact_split(range(c), c.split);
-            } else {
-                in_scratch = !c.in_scratch;
-                s = apply_binned_split_into(range(c), range(c.begin, c.end, in_scratch), c.split,
-                                            settings_.parallel_threshold);
-            }
+            bool moved = false;
+            s = apply_split_in_or_across(range(c), range(c.begin, c.end, !c.in_scratch), c.split,
+                                         settings_.parallel_threshold, moved);
+            if (moved) in_scratch = !c.in_scratch;
         }
         if (s.left_count > 0 && s.left_count < c.size())
             return halves_of(c, in_scratch, s.left_count, s.left, s.right, median_only);

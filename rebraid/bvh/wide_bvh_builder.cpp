@@ -11,7 +11,6 @@
 #include <string>
 
 #include "rebraid/bvh/binned_split.h"
-#include "rebraid/bvh/exact_split.h"
 #include "rebraid/bvh/optimal_wide_tree_grower.h"
 #include "rebraid/core/error.h"
 #include "rebraid/core/huge_pages.h"
@@ -114,17 +113,11 @@ public:
         SplitResult s;
         bool in_scratch = c.in_scratch;
         if (c.split.is_valid()) {
-            // The partition measures both sides on the way: the children need no extra
-            // pass. Large ranges go into the other buffer (no copying back), the tiny ranges
-            // of exact splits stay in place (switching buffers buys them nothing). Both give
-            // the same order as apply_binned_split, which other builders use.
-            if (c.split.is_exact() && c.size() <= kMaxExactSplitPrims) {
-                s = apply_exact_split(range(c), c.split);
-            } else {
-                in_scratch = !c.in_scratch;
-                s = apply_binned_split_into(range(c), range(c.begin, c.end, in_scratch), c.split,
-                                            settings_.parallel_threshold);
-            }
+            // The same order as apply_binned_split, which other builders use.
+            bool moved = false;
+            s = apply_split_in_or_across(range(c), range(c.begin, c.end, !c.in_scratch), c.split,
+                                         settings_.parallel_threshold, moved);
+            if (moved) in_scratch = !c.in_scratch;
         }
         // Binning and partition map centroids identically, so neither side is empty; should
         // one be, the index split below still makes progress.

@@ -201,22 +201,13 @@ TEST(SpatialSplitBvh, DegenerateMeshesBuildAndHitAsEmbree) {
         EXPECT_LE(bvh.prim_ids.size(), 2 * mesh.triangles.size());
         // The same answers as Embree flat; copies of one triangle tie everywhere, and the
         // collinear and point meshes have nothing to hit.
-        Scene scene;
-        scene.meshes.push_back(mesh);
-        scene.instances.push_back({0, AffineTransform::identity()});
-        std::vector<ObjectBvh> bvhs{bvh};
-        TopLevelBvh top = build_two_level(scene, bvhs);
-        const InstancedAccel built(scene, std::move(bvhs), std::move(top), AccelStats{});
-        const glue::EmbreeFlatAccel reference(scene);
         BBox3f around = mesh.bounds();
         around.extend(around.min - Vec3f{1, 1, 1});
         around.extend(around.max + Vec3f{1, 1, 1});
-        const std::vector<Ray> rays = test::varied_rays(reference, around, 4000, 11);
         test::Tolerance tolerance = test::tolerance_for(around);
         tolerance.max_tie_fraction = 1.0;
         tolerance.min_hit_fraction = 0.0;
-        test::expect_same_answers(scene, rays, test::trace_all(reference, rays),
-                                  test::trace_all(built, rays), tolerance);
+        test::expect_hits_of_embree_flat(mesh, bvh, around, 4000, 11, tolerance);
     }
     const ObjectBvh empty = build_object_bvh(Mesh{}, with_spatial_splits(0.3f));
     EXPECT_TRUE(empty.prim_ids.empty());

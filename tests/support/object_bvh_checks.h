@@ -148,19 +148,26 @@ inline void expect_valid(const Mesh& mesh, const ObjectBvh& bvh) {
     EXPECT_EQ(stale_hints, 0u) << "leaf-row hints out of step with the leaves";
 }
 
-/// The updated tree answers 10,000 varied rays (test_rays.h; closest hit and occlusion) as Embree
-/// flat built on the same deformed frame.
-inline void expect_hits_of_embree_flat(const Mesh& mesh, const ObjectBvh& bvh) {
+/// The tree answers `ray_count` varied rays around `ray_box` (test_rays.h; closest hit and
+/// occlusion) as Embree flat built on the same mesh, within `tolerance`.
+inline void expect_hits_of_embree_flat(const Mesh& mesh, const ObjectBvh& bvh,
+                                       const BBox3f& ray_box, std::size_t ray_count,
+                                       std::uint64_t seed, const Tolerance& tolerance) {
     Scene scene;
     scene.meshes.push_back(mesh);
     scene.instances.push_back({0, AffineTransform::identity()});
     std::vector<ObjectBvh> bvhs{bvh};
     TopLevelBvh top = build_two_level(scene, bvhs);
-    const InstancedAccel updated(scene, std::move(bvhs), std::move(top), AccelStats{});
+    const InstancedAccel tested(scene, std::move(bvhs), std::move(top), AccelStats{});
     const glue::EmbreeFlatAccel reference(scene);
-    const std::vector<Ray> rays = varied_rays(reference, mesh.bounds(), 10000, 5);
-    expect_same_answers(scene, rays, trace_all(reference, rays), trace_all(updated, rays),
-                        tolerance_for(mesh.bounds()));
+    const std::vector<Ray> rays = varied_rays(reference, ray_box, ray_count, seed);
+    expect_same_answers(scene, rays, trace_all(reference, rays), trace_all(tested, rays),
+                        tolerance);
+}
+
+/// The updated tree answers 10,000 varied rays as Embree flat built on the same deformed frame.
+inline void expect_hits_of_embree_flat(const Mesh& mesh, const ObjectBvh& bvh) {
+    expect_hits_of_embree_flat(mesh, bvh, mesh.bounds(), 10000, 5, tolerance_for(mesh.bounds()));
 }
 
 inline std::uint64_t structure_hash(const ObjectBvh& bvh) {
