@@ -78,7 +78,7 @@ struct BuildSettings {
 /// Room for spatial splits in object BVHs built once (BuildSettings::spatial_split_budget):
 /// 20 % more references. On the shared and generated scenes the own flat BVH traced up to 16 %
 /// more rays per second than without, the re-braided structure between 4 % fewer and 10 % more
-/// (two_cylinder_engine), for 1-18 % more memory and builds 1.5-4.5 times as long
+/// (two_cylinder_engine), for 1-18 % more memory and builds 1.5-4.6 times as long
 /// (docs/design.md, "Spatial splits").
 inline constexpr float kStaticSpatialSplitBudget = 0.2f;
 
