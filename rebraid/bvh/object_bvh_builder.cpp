@@ -52,17 +52,18 @@ ObjectBvh make_object_bvh(const Mesh& mesh, WideBvh tree, std::vector<PrimId> le
 
 ObjectBvh build_object_bvh(const Mesh& mesh, const BuildSettings& settings) {
     const BuildTimer timer;
+    WideBvh tree;
+    std::vector<PrimId> leaf_prims;
     if (settings.spatial_split_budget > 0.0f) {
         SpatialSplitBvh built = build_spatial_split_bvh(mesh, settings);
-        ObjectBvh bvh = make_object_bvh(mesh, std::move(built.tree), std::move(built.leaf_prims),
-                                        settings.pre_arranged_leaves);
-        bvh.build_ms = timer.elapsed_ms();
-        return bvh;
+        tree = std::move(built.tree);
+        leaf_prims = std::move(built.leaf_prims);
+    } else {
+        std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
+        tree = build_wide_bvh(prims, settings);
+        leaf_prims.resize(prims.size());
+        for (std::size_t i = 0; i < prims.size(); ++i) leaf_prims[i] = prims[i].id;
     }
-    std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
-    WideBvh tree = build_wide_bvh(prims, settings);
-    std::vector<PrimId> leaf_prims(prims.size());
-    for (std::size_t i = 0; i < prims.size(); ++i) leaf_prims[i] = prims[i].id;
     ObjectBvh bvh =
         make_object_bvh(mesh, std::move(tree), std::move(leaf_prims), settings.pre_arranged_leaves);
     bvh.build_ms = timer.elapsed_ms();

@@ -1,20 +1,17 @@
 #include "rebraid/bvh/spatial_split.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
+
+#include "rebraid/core/parallel_blocks.h"
 
 namespace rebraid {
 namespace {
 
 /// Most bins per axis a spatial split search uses.
 constexpr std::uint32_t kMaxSpatialBins = 16;
-
-/// References per block of a parallel binning; fixed, so the blocks never depend on threads.
-constexpr std::size_t kBinningBlock = 4096;
 
 /// Per axis and bin: the boxes of the parts falling in the bin, and how many references
 /// start (entries) and end (exits) in it.
@@ -34,11 +31,9 @@ struct SpatialBins {
     }
 };
 
-/// How the bins of each axis are laid out over the range's box.
-struct SpatialBinLayout {
-    std::uint32_t bin_count = 0;
-    SpatialSplit axes[3];  ///< per axis: origin, width, inverse width (axis -1: not binned)
-};
+/// How the bins of each axis are laid out over the range's box: origin, width and inverse
+/// width per axis (axis -1: not binned).
+using SpatialBinLayout = std::array<SpatialSplit, 3>;
 
 /// Extends `boxes[b]`, for each bin b from `first` to `last` along `axis`, by the box of the part
 /// of `triangle` within `box` in that bin. The part in a slab between two planes is a convex
@@ -107,7 +102,7 @@ void bin_references(std::span<const BuildPrim> refs, const Mesh& mesh,
     for (const BuildPrim& ref : refs) {
         const std::array<Vec3f, 3> triangle = mesh.corners(PrimId(ref.id));
         for (int a = 0; a < 3; ++a) {
-            const SpatialSplit& axis = layout.axes[a];
+            const SpatialSplit& axis = layout[a];
             if (axis.axis < 0) continue;
             const std::uint32_t first = axis.bin_of(ref.bounds.min[a]);
             const std::uint32_t last = axis.bin_of(ref.bounds.max[a]);
@@ -130,11 +125,10 @@ SpatialSplit find_spatial_split(std::span<const BuildPrim> refs, const BBox3f& b
     bin_count = std::clamp(bin_count, 2u, kMaxSpatialBins);
     if (refs.size() < 2) return best;
     SpatialBinLayout layout;
-    layout.bin_count = bin_count;
     bool any_axis = false;
     for (int a = 0; a < 3; ++a) {
         const float extent = bounds.max[a] - bounds.min[a];
-        SpatialSplit& axis = layout.axes[a];
+        SpatialSplit& axis = layout[a];
         if (!(extent > 0.0f) || !std::isfinite(extent)) continue;
         axis.axis = a;
         axis.origin = bounds.min[a];
@@ -155,12 +149,9 @@ SpatialSplit find_spatial_split(std::span<const BuildPrim> refs, const BBox3f& b
     if (refs.size() < parallel_threshold) {
         bin_references(refs, mesh, layout, bins);
     } else {
-        const std::size_t blocks = (refs.size() + kBinningBlock - 1) / kBinningBlock;
-        std::vector<SpatialBins> partial(blocks);
-        tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t block) {
+        std::vector<SpatialBins> partial(parallel_block_count(refs.size()));
+        for_each_block(refs.size(), [&](std::size_t block, std::size_t begin, std::size_t end) {
             partial[block].bin_count = bin_count;
-            const std::size_t begin = block * kBinningBlock;
-            const std::size_t end = std::min(refs.size(), begin + kBinningBlock);
             bin_references(refs.subspan(begin, end - begin), mesh, layout, partial[block]);
         });
         for (const SpatialBins& part : partial) bins.merge(part);
@@ -168,7 +159,7 @@ SpatialSplit find_spatial_split(std::span<const BuildPrim> refs, const BBox3f& b
 
     const auto count = std::uint32_t(refs.size());
     for (int a = 0; a < 3; ++a) {
-        if (layout.axes[a].axis < 0) continue;
+        if (layout[a].axis < 0) continue;
         // Sweep from the right: the box and reference count of bins [b, bin_count).
         float right_area[kMaxSpatialBins];
         std::uint32_t right_refs[kMaxSpatialBins];
@@ -191,10 +182,8 @@ SpatialSplit find_spatial_split(std::span<const BuildPrim> refs, const BBox3f& b
             const float cost =
                 box.half_area() * float(left_refs) + right_area[b] * float(right_refs[b]);
             if (cost < best.cost) {
-                best = layout.axes[a];
+                best = layout[a];
                 best.bin = b;
-                best.left_count = left_refs;
-                best.right_count = right_refs[b];
                 best.cost = cost;
             }
         }

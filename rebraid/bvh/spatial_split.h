@@ -26,8 +26,6 @@ struct SpatialSplit {
     float width = 0.0f;          ///< bin width along `axis`
     float inverse_width = 0.0f;  ///< 1 / width, as the binning multiplied by it
     std::uint32_t bin_count = 0;
-    std::uint32_t left_count = 0,
-                  right_count = 0;  ///< references each side gets, duplicates included
     float cost = std::numeric_limits<float>::infinity();  ///< A_L N_L + A_R N_R (half areas)
 
     bool is_valid() const { return axis >= 0; }

@@ -1,7 +1,5 @@
 #include "rebraid/bvh/spatial_split_bvh_builder.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -14,6 +12,7 @@
 #include "rebraid/bvh/optimal_wide_tree_grower.h"
 #include "rebraid/bvh/spatial_split.h"
 #include "rebraid/core/error.h"
+#include "rebraid/core/parallel_blocks.h"
 #include "rebraid/core/scratch_buffer.h"
 
 namespace rebraid {
@@ -128,25 +127,19 @@ private:
         struct Sides {
             BBox3f left, right;
         };
-        const auto measure = [&](std::span<const BuildPrim> refs) {
-            Sides sides;
-            for (const BuildPrim& ref : refs)
-                (c.split.goes_left(ref) ? sides.left : sides.right).extend(ref.bounds);
-            return sides;
-        };
         const std::span<const BuildPrim> refs = range(c);
-        Sides sides;
-        if (refs.size() < settings_.parallel_threshold) {
-            sides = measure(refs);
-        } else {
-            std::vector<Sides> blocks(block_count(refs.size()));
-            tbb::parallel_for(std::size_t(0), blocks.size(),
-                              [&](std::size_t b) { blocks[b] = measure(block(refs, b)); });
-            for (const Sides& part : blocks) {
-                sides.left.extend(part.left);
-                sides.right.extend(part.right);
-            }
-        }
+        const Sides sides = reduce_over_blocks(
+            refs.size(), settings_.parallel_threshold, Sides{},
+            [&](std::size_t begin, std::size_t end, Sides sides) {
+                for (const BuildPrim& ref : refs.subspan(begin, end - begin))
+                    (c.split.goes_left(ref) ? sides.left : sides.right).extend(ref.bounds);
+                return sides;
+            },
+            [](Sides a, const Sides& b) {
+                a.left.extend(b.left);
+                a.right.extend(b.right);
+                return a;
+            });
         return intersection(sides.left, sides.right).half_area() > kOverlapShare * root_area_;
     }
 
@@ -176,57 +169,56 @@ private:
         return std::uint32_t(std::uint64_t(room) * left_count / (left_count + right_count));
     }
 
+    /// Hands `ref` to the side(s) of `split` it lies on: `put_left(part)`, `put_right(part)`;
+    /// a reference crossing the plane is cut, each part boxed by split_triangle_box (both parts
+    /// empty cannot happen, but then the whole reference goes left).
+    template <class PutLeft, class PutRight>
+    void divide(const SpatialSplit& split, const BuildPrim& ref, PutLeft&& put_left,
+                PutRight&& put_right) const {
+        if (split.is_left_only(ref.bounds)) return put_left(ref);
+        if (split.is_right_only(ref.bounds)) return put_right(ref);
+        BBox3f left_box, right_box;
+        split_triangle_box(mesh_.corners(PrimId(ref.id)), ref.bounds, split.axis, split.plane(),
+                           left_box, right_box);
+        if (left_box.is_empty() && right_box.is_empty()) left_box = ref.bounds;
+        if (!left_box.is_empty()) put_left({left_box, ref.id, ref.weight});
+        if (!right_box.is_empty()) put_right({right_box, ref.id, ref.weight});
+    }
+
     /// Divides `c` by its spatial split into the other buffer: left references from the
-    /// segment's start up, right ones from its end down, crossing ones cut in two. False (the
-    /// source untouched) when a side came out empty or the references outgrew the room.
+    /// segment's start up, right ones from its end down (large ranges in parallel blocks,
+    /// split_spatially_in_blocks). False (the source untouched) when a side came out empty or
+    /// the references outgrew the room.
     bool split_spatially(const SegmentCandidate& c, bool median_only,
                          std::array<SegmentCandidate, 2>& halves) const {
-        const SpatialSplit& split = c.spatial;
         const std::span<const BuildPrim> from = range(c);
+        if (from.size() >= settings_.parallel_threshold)
+            return split_spatially_in_blocks(c, median_only, halves);
         const bool in_scratch = !c.in_scratch;
         const std::span<BuildPrim> to = range(c.begin, c.capacity_end, in_scratch);
         std::uint32_t left_count = 0, right_count = 0;
         RangeInfo left, right;
-        const auto put_left = [&](const BuildPrim& ref) {
-            to[left_count++] = ref;
-            left.add(ref);
-        };
-        const auto put_right = [&](const BuildPrim& ref) {
-            to[to.size() - 1 - right_count++] = ref;
-            right.add(ref);
-        };
-        const float plane = split.plane();
-        // Cuts a crossing reference: its parts on either side (both empty cannot happen, but
-        // then the whole reference goes left).
-        const auto cut = [&](const BuildPrim& ref, BBox3f& left_box, BBox3f& right_box) {
-            split_triangle_box(mesh_.corners(PrimId(ref.id)), ref.bounds, split.axis, plane,
-                               left_box, right_box);
-            if (left_box.is_empty() && right_box.is_empty()) left_box = ref.bounds;
-        };
-        if (from.size() >= settings_.parallel_threshold)
-            return split_spatially_in_blocks(c, median_only, cut, halves);
         // The binning counted every side a reference goes to, and the room was checked
-        // against those counts; a reference that finds no slot would mean they disagree.
-        const auto has_room = [&](std::uint32_t more) {
-            return left_count + right_count + more <= to.size();
+        // against those counts; a part that finds no slot would mean they disagree.
+        bool outgrew = false;
+        const auto has_room = [&] {
+            outgrew = outgrew || left_count + right_count >= to.size();
+            return !outgrew;
         };
-        for (const BuildPrim& ref : from) {
-            if (split.is_left_only(ref.bounds)) {
-                if (!has_room(1)) return false;
-                put_left(ref);
-            } else if (split.is_right_only(ref.bounds)) {
-                if (!has_room(1)) return false;
-                put_right(ref);
-            } else {
-                BBox3f left_box, right_box;
-                cut(ref, left_box, right_box);
-                if (!has_room(std::uint32_t(!left_box.is_empty()) + !right_box.is_empty()))
-                    return false;
-                if (!left_box.is_empty()) put_left({left_box, ref.id, ref.weight});
-                if (!right_box.is_empty()) put_right({right_box, ref.id, ref.weight});
-            }
-        }
-        if (left_count == 0 || right_count == 0) return false;
+        for (const BuildPrim& ref : from)
+            divide(
+                c.spatial, ref,
+                [&](const BuildPrim& part) {
+                    if (!has_room()) return;
+                    to[left_count++] = part;
+                    left.add(part);
+                },
+                [&](const BuildPrim& part) {
+                    if (!has_room()) return;
+                    to[to.size() - 1 - right_count++] = part;
+                    right.add(part);
+                });
+        if (outgrew || left_count == 0 || right_count == 0) return false;
         // The right references, stored from the end down, move to follow the left ones' room.
         const std::uint32_t room = c.capacity_end - c.begin - left_count - right_count;
         const std::uint32_t left_room = share_of_room(room, left_count, right_count);
@@ -239,48 +231,39 @@ private:
         return true;
     }
 
-    /// split_spatially for large ranges: each block of references divided into lists of its
-    /// own in parallel, the lists then copied out in block order (so the order depends on the
-    /// input and the threshold only), left ones first, right ones after the left ones' room.
-    template <class Cut>
-    bool split_spatially_in_blocks(const SegmentCandidate& c, bool median_only, const Cut& cut,
+    /// split_spatially for large ranges: each block of references (parallel_blocks.h) divided
+    /// into lists of its own in parallel, the lists then copied out in block order (so the
+    /// order depends on the input and the threshold only), left ones first, right ones after
+    /// the left ones' room.
+    bool split_spatially_in_blocks(const SegmentCandidate& c, bool median_only,
                                    std::array<SegmentCandidate, 2>& halves) const {
-        const SpatialSplit& split = c.spatial;
         const std::span<const BuildPrim> from = range(c);
-        struct Sides {
-            std::vector<BuildPrim> left, right;
-            RangeInfo left_info, right_info;
-        };
-        std::vector<Sides> blocks(block_count(from.size()));
-        tbb::parallel_for(std::size_t(0), blocks.size(), [&](std::size_t b) {
-            Sides& sides = blocks[b];
-            const auto put = [](std::vector<BuildPrim>& list, RangeInfo& info,
-                                const BuildPrim& ref) {
-                list.push_back(ref);
+        struct Side {
+            std::vector<BuildPrim> refs;
+            RangeInfo info;
+            void put(const BuildPrim& ref) {
+                refs.push_back(ref);
                 info.add(ref);
-            };
-            for (const BuildPrim& ref : block(from, b)) {
-                if (split.is_left_only(ref.bounds)) {
-                    put(sides.left, sides.left_info, ref);
-                } else if (split.is_right_only(ref.bounds)) {
-                    put(sides.right, sides.right_info, ref);
-                } else {
-                    BBox3f left_box, right_box;
-                    cut(ref, left_box, right_box);
-                    if (!left_box.is_empty())
-                        put(sides.left, sides.left_info, {left_box, ref.id, ref.weight});
-                    if (!right_box.is_empty())
-                        put(sides.right, sides.right_info, {right_box, ref.id, ref.weight});
-                }
             }
+        };
+        struct Sides {
+            Side left, right;
+        };
+        std::vector<Sides> blocks(parallel_block_count(from.size()));
+        for_each_block(from.size(), [&](std::size_t b, std::size_t begin, std::size_t end) {
+            Sides& sides = blocks[b];
+            for (const BuildPrim& ref : from.subspan(begin, end - begin))
+                divide(
+                    c.spatial, ref, [&](const BuildPrim& part) { sides.left.put(part); },
+                    [&](const BuildPrim& part) { sides.right.put(part); });
         });
         std::uint64_t left_count = 0, right_count = 0;
         RangeInfo left, right;
         for (const Sides& sides : blocks) {
-            left_count += sides.left.size();
-            right_count += sides.right.size();
-            left.merge(sides.left_info);
-            right.merge(sides.right_info);
+            left_count += sides.left.refs.size();
+            right_count += sides.right.refs.size();
+            left.merge(sides.left.info);
+            right.merge(sides.right.info);
         }
         const std::uint64_t capacity = c.capacity_end - c.begin;
         if (left_count == 0 || right_count == 0 || left_count + right_count > capacity)
@@ -296,12 +279,14 @@ private:
         for (std::size_t b = 0; b < blocks.size(); ++b) {
             left_at[b] = next_left;
             right_at[b] = next_right;
-            next_left += std::uint32_t(blocks[b].left.size());
-            next_right += std::uint32_t(blocks[b].right.size());
+            next_left += std::uint32_t(blocks[b].left.refs.size());
+            next_right += std::uint32_t(blocks[b].right.refs.size());
         }
-        tbb::parallel_for(std::size_t(0), blocks.size(), [&](std::size_t b) {
-            std::copy(blocks[b].left.begin(), blocks[b].left.end(), to.begin() + left_at[b]);
-            std::copy(blocks[b].right.begin(), blocks[b].right.end(), to.begin() + right_at[b]);
+        for_each_block(from.size(), [&](std::size_t b, std::size_t, std::size_t) {
+            std::copy(blocks[b].left.refs.begin(), blocks[b].left.refs.end(),
+                      to.begin() + left_at[b]);
+            std::copy(blocks[b].right.refs.begin(), blocks[b].right.refs.end(),
+                      to.begin() + right_at[b]);
         });
         halves = {evaluate(c.begin, c.begin + std::uint32_t(left_count), right_begin, in_scratch,
                            left, median_only),
@@ -309,16 +294,6 @@ private:
                            in_scratch, right, median_only)};
         return true;
     }
-
-    /// Blocks of kBlockRefs references of a range, for the parallel passes.
-    static std::size_t block_count(std::size_t refs) {
-        return (refs + kBlockRefs - 1) / kBlockRefs;
-    }
-    static std::span<const BuildPrim> block(std::span<const BuildPrim> refs, std::size_t b) {
-        const std::size_t begin = b * kBlockRefs;
-        return refs.subspan(begin, std::min(kBlockRefs, refs.size() - begin));
-    }
-    static constexpr std::size_t kBlockRefs = 4096;
 
     std::span<BuildPrim> range(const SegmentCandidate& c) const {
         return range(c.begin, c.end, c.in_scratch);
