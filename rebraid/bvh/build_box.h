@@ -80,6 +80,11 @@ struct BuildBox {
     bool is_empty() const {
         return !(_mm_cvtss_f32(negated_extent()) <= 0.0f);
     }
+    /// True when min > max along any axis (is_empty looks at x alone, enough for boxes
+    /// that only ever grow; a box cut down by another can come out empty along y or z).
+    bool is_empty_on_any_axis() const {
+        return (_mm_movemask_ps(_mm_cmpgt_ps(negated_extent(), _mm_setzero_ps())) & 7) != 0;
+    }
     /// Bit a set when this box lies entirely below `other` along axis a (max < other's min).
     std::uint32_t axes_below(const BuildBox& other) const {
         const __m128 below = _mm_cmplt_ps(negate(negated_upper()), other.lower());
@@ -124,6 +129,9 @@ private:
     }
     bool is_empty() const {
         return !(box.min.x <= box.max.x);
+    }
+    bool is_empty_on_any_axis() const {
+        return box.is_empty();
     }
     std::uint32_t axes_below(const BuildBox& other) const {
         std::uint32_t axes = 0;
