@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "rebraid/bvh/build_settings.h"
@@ -9,11 +10,25 @@
 
 namespace rebraid {
 
+/// How the spatial split search went in one build.
+struct SpatialSplitSearchCounts {
+    /// Ranges of at least 4 references with room left for cuts.
+    std::uint64_t candidates = 0;
+    /// Ranges among them where a spatial split was searched: their object split's halves
+    /// overlap, and the search had not come up empty four times in a row above them.
+    std::uint64_t searches = 0;
+    /// Searches that found a spatial split cheaper than the object split.
+    std::uint64_t cheaper = 0;
+    /// The most searches in a row on one way down that found none cheaper (at most 4).
+    std::uint32_t longest_fruitless_run = 0;
+};
+
 /// A wide BVH whose leaves index `leaf_prims`: the triangles in leaf order, a triangle cut by
 /// spatial splits listed once in each leaf that holds a part of it.
 struct SpatialSplitBvh {
     WideBvh tree;
     std::vector<PrimId> leaf_prims;
+    SpatialSplitSearchCounts search_counts;
 };
 
 /// The binned-SAH build of build_wide_bvh over the triangles of `mesh`, where each range also
@@ -23,9 +38,11 @@ struct SpatialSplitBvh {
 /// references and the room after them, spends that room on the duplicates of its spatial
 /// splits, and hands what is left to its two halves in proportion to their reference counts
 /// (as the re-braiding paper's budgeted segments, §5.2), so the tree depends on the input and
-/// the settings only, never on the threads. Nodes are cut from the binary tree by the optimal
-/// collapse. Throws rebraid::Error unless settings.spatial_split_budget > 0 and
-/// settings.collapse == NodeCollapse::optimal (BuildSettings::validate).
+/// the settings only, never on the threads. Below four searches in a row on the way down that
+/// found no spatial split cheaper than the object split, ranges search no more (splits rarely
+/// pay there). Nodes are cut from the binary tree by the optimal collapse. Throws
+/// rebraid::Error unless settings.spatial_split_budget > 0 and settings.collapse ==
+/// NodeCollapse::optimal (BuildSettings::validate).
 SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& settings);
 
 }  // namespace rebraid

@@ -10,6 +10,7 @@
 #include "rebraid/bvh/spatial_split_bvh_builder.h"
 #include "rebraid/core/error.h"
 #include "rebraid/core/random.h"
+#include "rebraid/generators/mesh_generators.h"
 #include "support/object_bvh_checks.h"
 #include "support/test_scenes.h"
 #include "support/thread_count_hash.h"
@@ -152,6 +153,26 @@ TEST(SpatialSplitBvh, LowersTheBuildCostOfLongTriangles) {
     const BuildSettings with = with_spatial_splits(0.3f), without;
     EXPECT_LT(build_cost(build_object_bvh(mesh, with), with),
               0.7 * build_cost(build_object_bvh(mesh, without), without));
+}
+
+TEST(SpatialSplitBvh, SearchesStopBelowFourThatFoundNothing) {
+    // A torus of small, even triangles: its halves overlap because the surface curves, and
+    // cutting triangles hardly ever beats an object split there. A way down the tree stops
+    // searching after 4 empty searches in a row (without the rule: runs of 7 here, and 3.6x
+    // the searches).
+    const SpatialSplitSearchCounts torus =
+        build_spatial_split_bvh(make_torus({.major_segment_count = 192, .minor_segment_count = 48}),
+                                with_spatial_splits(0.2f))
+            .search_counts;
+    EXPECT_EQ(torus.longest_fruitless_run, 4u);
+    EXPECT_LE(torus.cheaper, torus.searches / 20);
+    EXPECT_LT(torus.searches, torus.candidates / 20);
+    // The slivers' cuts pay at every level: a cheaper split found starts the run again, so the
+    // searches go on all the way down.
+    const SpatialSplitSearchCounts slivers =
+        build_spatial_split_bvh(long_triangles(3000, 6), with_spatial_splits(0.3f)).search_counts;
+    EXPECT_GT(slivers.cheaper, slivers.searches / 10);
+    EXPECT_GT(slivers.searches, slivers.candidates / 2);
 }
 
 TEST(SpatialSplitBvh, SameTreeOnOneTwoAndEightThreads) {
