@@ -24,14 +24,14 @@ namespace {
 constexpr std::uint32_t kMinSpatialSplitRefs = 4;
 
 /// Once this many spatial split searches in a row on the way down found none cheaper than the
-/// object split, the ranges below search no more. Where
-/// splits pay, they pay near the root and keep paying along the way (long triangles are long
-/// at every level); where they do not (meshes of small, evenly sized triangles, whose halves
-/// overlap because the surface curves), almost every search comes up empty all the way down.
-/// The drop-in's 576 torus knots: 372,125 searches found 41 cheaper splits, and stopping after
-/// 4 fruitless ones in a row builds them in 1.27 s instead of 2.22 s, at an SAH 0.002 % higher;
-/// two_cylinder_engine's glue structure 68 ms instead of 77 (+0.05 %); 3 in a row cost
-/// brainstem's flat BVH 0.7 % of SAH, 4 0.1 % (docs/design.md, "Spatial splits").
+/// object split, the ranges below search no more. Where splits pay, they pay near the root and
+/// keep paying along the way (long triangles are long at every level); where they do not
+/// (meshes of small, evenly sized triangles, whose halves overlap because the surface curves),
+/// almost every search comes up empty all the way down. The drop-in's 576 torus knots: 372,125
+/// searches found 41 cheaper splits, and stopping after 4 empty ones in a row builds them in
+/// 1.12 s instead of 2.04, at an SAH 0.002 % higher; two_cylinder_engine's glue structure in
+/// 67 ms instead of 73 (+0.05 %); 3 in a row cost brainstem's flat BVH 0.7 % of SAH, 4 cost
+/// 0.1 % (docs/design.md, "Spatial splits").
 constexpr std::uint32_t kMaxFruitlessSearches = 4;
 
 /// Bins per axis of the spatial split search: up to 16, one per 4 references in smaller
