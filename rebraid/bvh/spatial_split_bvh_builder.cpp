@@ -95,17 +95,10 @@ public:
         if (n <= 1) return c;
         if (!median_only) {
             c.split = find_binned_split(range(c), info, settings_);
-            if (c.room() > 0 && n >= kMinSpatialSplitRefs) ++counts_->candidates;
-            if (c.room() > 0 && n >= kMinSpatialSplitRefs &&
-                fruitless_searches < kMaxFruitlessSearches && overlaps_much(c)) {
-                const std::uint32_t bins = std::clamp(n / kRefsPerSpatialBin, 4u, kSpatialBins);
-                c.spatial = find_spatial_split(range(c), info.bounds, mesh_, bins, c.room(),
-                                               settings_.parallel_threshold);
-                c.is_spatial = c.spatial.is_valid() && c.spatial.cost < c.split.cost;
-                c.fruitless_searches = c.is_spatial ? 0 : fruitless_searches + 1;
-                ++counts_->searches;
-                if (c.is_spatial) ++counts_->cheaper;
-                counts_->add_fruitless_run(c.fruitless_searches);
+            if (c.room() > 0 && n >= kMinSpatialSplitRefs) {
+                ++counts_->candidates;
+                if (fruitless_searches < kMaxFruitlessSearches && overlaps_much(c))
+                    search_spatial_split(c, fruitless_searches);
             }
         }
         if (!c.split.is_valid() && !c.is_spatial) {
@@ -153,6 +146,19 @@ public:
     }
 
 private:
+    /// Weighs the best spatial split of `c` (with room and at least kMinSpatialSplitRefs
+    /// references) against its object split, and counts the search.
+    void search_spatial_split(SegmentCandidate& c, std::uint32_t fruitless_searches) const {
+        const std::uint32_t bins = std::clamp(c.size() / kRefsPerSpatialBin, 4u, kSpatialBins);
+        c.spatial = find_spatial_split(range(c), c.info.bounds, mesh_, bins, c.room(),
+                                       settings_.parallel_threshold);
+        c.is_spatial = c.spatial.is_valid() && c.spatial.cost < c.split.cost;
+        c.fruitless_searches = c.is_spatial ? 0 : fruitless_searches + 1;
+        ++counts_->searches;
+        if (c.is_spatial) ++counts_->cheaper;
+        counts_->add_fruitless_run(c.fruitless_searches);
+    }
+
     /// Whether the boxes of the object split's halves overlap by more than a small share of
     /// the root's area (the criterion of Stich et al. 2009): only then can a spatial split be worth
     /// its search, which clips every crossing triangle. The paper's share is 1e-5; 1e-3 built
