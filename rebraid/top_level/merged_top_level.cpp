@@ -139,17 +139,51 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     const auto is_world_space = [&](const TopLevelItem& item) {
         return targets[item.instance_id].space == InstanceTarget::kWorldSpace;
     };
-    // Merged where most items are in world space: the merged loop costs every node a little
-    // more (the choice of leaf visit, each object leaf's source), which the entries saved
-    // repay unless most items still enter placed instances. Counting the world-space items
-    // that name object leaves too (then entered, since hung) merged brainstem and cg57_cruiser,
-    // whose meshes placed once are built in world space (meshes_in_world_space):
-    // 0.95 -> 1.03 and 0.92 -> 1.01 of Embree flat's speed on diffuse rays (docs/design.md,
-    // "World-space items merged into the top level").
+    const auto bvh_of = [&](const TopLevelItem& item) -> const ObjectBvhView& {
+        return views[targets[item.instance_id].mesh];
+    };
+    // Placed items' subtrees are copied only where all of them fit the budget. The copies
+    // are counted as the items are found, and the count stops once it is spent (a scene of
+    // many placed instances would otherwise walk every instanced node only to give up). The
+    // sum only grows, so whether it ends over the budget does not depend on the order.
+    bool merges_placed = false;
+    if (settings.placed_instances) {
+        std::vector<const TopLevelItem*> placed;
+        for (const WideNode& node : top.nodes)
+            for (const NodeRef child : node.children)
+                if (const TopLevelItem* item = mergeable_item(top, child);
+                    item && !is_world_space(*item))
+                    placed.push_back(item);
+        const double budget = double(settings.placed_node_budget) * double(object_nodes);
+        std::atomic<std::uint64_t> copied{0};
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, placed.size()), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                if (double(copied.load(std::memory_order_relaxed)) > budget) return;
+                copied.fetch_add(count_inner_nodes(bvh_of(*placed[i]), placed[i]->object_node),
+                                 std::memory_order_relaxed);
+            }
+        });
+        merges_placed = double(copied.load()) <= budget;
+    }
+    // World-space items are merged where most items are in world space, or where the placed
+    // items are merged too. The merged loop costs every node a little more (the choice of
+    // leaf visit, each object leaf's source), which the entries saved repay unless most items
+    // still enter placed instances. Counting the world-space items that name object leaves
+    // too (then entered, since hung) merged brainstem and cg57_cruiser, whose meshes placed
+    // once are built in world space (meshes_in_world_space): 0.95 -> 1.03 and 0.92 -> 1.01
+    // of Embree flat's speed on diffuse rays (docs/design.md, "World-space items merged into
+    // the top level"). Where the placed items merge, a world-space item left alone is the one
+    // entry left: two_cylinder_engine's engine block under the Embree glue's settings (0.33
+    // of the root's area, entered by 0.14 of the primary rays; docs/design.md).
     const auto world_items = std::ranges::count_if(top.items, is_world_space);
     const bool merges_world_space =
-        settings.world_space && 2 * std::size_t(world_items) >= top.items.size();
-    const auto merges = [&](const TopLevelItem& item) {
+        settings.world_space && (2 * std::size_t(world_items) >= top.items.size() || merges_placed);
+    // Subtrees are copied as merges_subtree says; object leaves hang (copying nothing) as
+    // hangs says: a placed instance's wherever placed items may merge.
+    const auto merges_subtree = [&](const TopLevelItem& item) {
+        return is_world_space(item) ? merges_world_space : merges_placed;
+    };
+    const auto hangs = [&](const TopLevelItem& item) {
         return is_world_space(item) ? merges_world_space : settings.placed_instances;
     };
     // Items naming inner object nodes: their subtrees are copied. Items naming object leaves:
@@ -164,10 +198,11 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
         InstanceId hung_instance = kInvalidId;
         for (int slot = 0; slot < kBvhWidth; ++slot) {
             const NodeRef child = node.children[slot];
-            if (const TopLevelItem* item = mergeable_item(top, child); item && merges(*item)) {
+            if (const TopLevelItem* item = mergeable_item(top, child);
+                item && merges_subtree(*item)) {
                 slots.push_back({n, slot, item});
             } else if (const TopLevelItem* leaf_item = hangable_item(top, child);
-                       leaf_item && merges(*leaf_item) &&
+                       leaf_item && hangs(*leaf_item) &&
                        node.child_bounds(slot).half_area() <=
                            MergedTopLevel::kHungLeafAreaShare * node_area) {
                 if (hung_instance == kInvalidId) hung_instance = leaf_item->instance_id;
@@ -177,42 +212,15 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     }
     if (slots.empty() && hung.empty()) return merged;
 
-    const auto bvh_of = [&](const MergedSlot& slot) -> const ObjectBvhView& {
-        return views[targets[slot.item->instance_id].mesh];
-    };
     // Each subtree's place in the copy, then the copies in parallel: sized once, as growing
     // the copy node by node moved and faulted it in again at every doubling (powerplant's
     // 109,000 object nodes took 200 ms that way).
-    // Placed items' copies are counted against their budget as they are counted, and the
-    // rest of them are skipped once it is spent (a scene of many placed instances would
-    // otherwise walk every instanced node only to give up). The sum only grows, so whether it
-    // ends over the budget does not depend on the order of the counts.
-    const double placed_budget = double(settings.placed_node_budget) * double(object_nodes);
-    std::atomic<std::uint64_t> placed_nodes{0};
     std::vector<std::uint32_t> first_node(slots.size() + 1);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            const bool is_placed = !is_world_space(*slots[i].item);
-            if (is_placed && double(placed_nodes.load(std::memory_order_relaxed)) > placed_budget)
-                continue;
-            first_node[i + 1] = count_inner_nodes(bvh_of(slots[i]), slots[i].item->object_node);
-            if (is_placed) placed_nodes.fetch_add(first_node[i + 1], std::memory_order_relaxed);
-        }
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+            first_node[i + 1] =
+                count_inner_nodes(bvh_of(*slots[i].item), slots[i].item->object_node);
     });
-    // Placed items over their budget: none of them is merged (the world-space ones still are,
-    // where they merge on their own).
-    if (double(placed_nodes.load()) > placed_budget) {
-        std::vector<MergedSlot> world_slots;
-        std::vector<std::uint32_t> world_first{0};
-        for (std::size_t i = 0; i < slots.size(); ++i)
-            if (is_world_space(*slots[i].item)) {
-                world_slots.push_back(slots[i]);
-                world_first.push_back(first_node[i + 1]);
-            }
-        if (world_slots.empty() && hung.empty()) return merged;
-        slots = std::move(world_slots);
-        first_node = std::move(world_first);
-    }
     // One source per hung leaf's instance, after the copied subtrees' (first use, in node and
     // slot order).
     std::vector<std::uint32_t> hung_source(targets.size(), kInvalidId);
@@ -243,7 +251,7 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size()), [&](const auto& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const MergedSlot& slot = slots[i];
-            const ObjectBvhView& bvh = bvh_of(slot);
+            const ObjectBvhView& bvh = bvh_of(*slot.item);
             const InstanceTarget& target = targets[slot.item->instance_id];
             merged.sources[i] = {bvh.leaf_rows,          bvh.triangles, bvh.prim_ids,
                                  slot.item->instance_id, &target,       target.space};

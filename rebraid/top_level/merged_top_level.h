@@ -31,7 +31,7 @@ struct MergedLeafSource {
 /// Which items merge_top_level_items copies into the traced tree.
 struct TopLevelMergeSettings {
     /// Items of instances placed by the identity (objects built in world space), where at
-    /// least half of the top's items are in world space.
+    /// least half of the top's items are in world space or the placed items merge too.
     bool world_space = true;
     /// Also items of placed instances: their copied nodes get world-space boxes (their
     /// triangles' corners mapped into the world, widened for the mapping's rounding as BRef
@@ -145,12 +145,12 @@ struct MergedTopLevel {
 /// or object leaves (hung in place, where MergedTopLevel::kHungLeafAreaShare allows; not
 /// where opening split leaves, TopLevelBvh::has_partial_leaves, since rows are laid out per
 /// whole leaf), as `settings` choose: world-space items (InstanceTarget::kWorldSpace) when at
-/// least half of the top's items are world-space items, items of placed instances (placed by
-/// `object_to_world`, per instance) when their copies hold at most placed_node_budget times
-/// `object_nodes` (the inner nodes of the scene's object BVHs) nodes (a hung leaf copies
-/// none). An empty MergedTopLevel when nothing is merged, for a top level whose root is a
-/// leaf, and where the copy would hold more nodes than a NodeRef can name. The merged
-/// traversal costs every node a little more (the choice of leaf visit, the source of each
+/// least half of the top's items are world-space items or the placed items merge too, items
+/// of placed instances (placed by `object_to_world`, per instance) when their copies hold at
+/// most placed_node_budget times `object_nodes` (the inner nodes of the scene's object BVHs)
+/// nodes (a hung leaf copies none). An empty MergedTopLevel when nothing is merged, for a top level
+/// whose root is a leaf, and where the copy would hold more nodes than a NodeRef can name. The
+/// merged traversal costs every node a little more (the choice of leaf visit, the source of each
 /// object leaf), which the entries saved repay where most items need no ray of their own;
 /// where most entered placed instances, it did not (docs/design.md, "World-space items merged
 /// into the top level"). Deterministic: subtrees and sources are placed in the top level's

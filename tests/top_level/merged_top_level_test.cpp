@@ -271,7 +271,16 @@ TEST(MergedTopLevel, HangsEachWorldSpaceItemsSubtreeOrLeafWhereTheItemWas) {
         EXPECT_EQ(reached[id], merged.is_object_node(std::uint32_t(id)) ? 1 : 0) << id;
 }
 
-TEST(MergedTopLevel, MergesOnlyWhereMostItemsAreInWorldSpace) {
+/// Whether some merged subtree or hung leaf is of an instance in world space.
+bool has_world_space_source(const MergedTopLevel& merged) {
+    return std::ranges::any_of(merged.sources, [](const MergedLeafSource& source) {
+        return source.space == InstanceTarget::kWorldSpace;
+    });
+}
+
+// World-space items merge where they are most of the items, or where the placed items merge
+// too (then the world-space ones would be the only entries left).
+TEST(MergedTopLevel, MergesWorldSpaceItemsWhereMostAreOrWherePlacedItemsMerge) {
     Scene mixed = test::make_overlap_scene(24, 5);
     for (std::size_t i = 0; i < mixed.instances.size(); i += 3)
         mixed.instances[i].object_to_world = AffineTransform::identity();
@@ -279,6 +288,15 @@ TEST(MergedTopLevel, MergesOnlyWhereMostItemsAreInWorldSpace) {
     EXPECT_TRUE(rebraided(test::make_overlap_scene(24, 5), true).merged_top_level().empty());
     EXPECT_FALSE(rebraided(world_space_scene(), true).merged_top_level().empty());
     EXPECT_TRUE(rebraided(world_space_scene(), false).merged_top_level().empty());
+
+    const InstancedAccel all = rebraided(mixed, true, true, 100.0f);
+    EXPECT_TRUE(has_world_space_source(all.merged_top_level()));
+    EXPECT_TRUE(has_placed_source(all.merged_top_level()));
+    EXPECT_FALSE(keeps_items(all.merged_top_level()));
+    // Placed items over their budget: the world-space minority is not merged either.
+    EXPECT_FALSE(has_world_space_source(rebraided(mixed, true, true, 0.0f).merged_top_level()));
+    // Nor where world-space items are not to be merged at all.
+    EXPECT_FALSE(has_world_space_source(rebraided(mixed, false, true, 100.0f).merged_top_level()));
 }
 
 /// Checks the copy below `copy` of the object subtree below `original` of a placed instance's
@@ -341,7 +359,7 @@ TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
     ASSERT_FALSE(merged.empty());
     EXPECT_TRUE(has_placed_source(merged));
     std::vector<int> reached(merged.nodes.size(), 0);
-    std::size_t merged_items = 0, hung_leaves = 0;
+    std::size_t merged_items = 0, hung_leaves = 0, world_space_items = 0, placed_items = 0;
     for (std::uint32_t n = 0; n < top.nodes.size(); ++n)
         for (int slot = 0; slot < kBvhWidth; ++slot) {
             const NodeRef child = top.nodes[n].children[slot];
@@ -352,7 +370,9 @@ TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
             if (!child.is_leaf() || (copy == child && !is_hung)) continue;
             const TopLevelItem& item = top.items[child.first_prim()];
             const InstanceTarget& target = accel.instance_targets()[item.instance_id];
-            EXPECT_NE(target.space, InstanceTarget::kWorldSpace);
+            // The world-space items merge with the placed ones (their meshes built in world
+            // space: the identity maps their corners).
+            const bool is_world_space = target.space == InstanceTarget::kWorldSpace;
             if (is_hung) {
                 // A placed item naming an object leaf hangs in its slot: its box stays the
                 // item's (world space), its triangles in object space.
@@ -369,14 +389,18 @@ TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
             EXPECT_EQ(source.instance, item.instance_id);
             EXPECT_EQ(source.target, &target);
             EXPECT_EQ(source.space, target.space);
-            expect_world_boxed_subtree(merged, accel.object_views()[target.mesh],
-                                       test::cut_triangles(accel.object_bvhs()[target.mesh]),
-                                       scene.instances[item.instance_id].object_to_world,
-                                       std::uint32_t(merged_items), item.object_node, copy,
-                                       reached);
+            expect_world_boxed_subtree(
+                merged, accel.object_views()[target.mesh],
+                test::cut_triangles(accel.object_bvhs()[target.mesh]),
+                is_world_space ? AffineTransform::identity()
+                               : scene.instances[item.instance_id].object_to_world,
+                std::uint32_t(merged_items), item.object_node, copy, reached);
             ++merged_items;
+            ++(is_world_space ? world_space_items : placed_items);
         }
     EXPECT_GT(hung_leaves, 0u);
+    EXPECT_GT(world_space_items, 0u);
+    EXPECT_GT(placed_items, 0u);
     EXPECT_LE(merged_items, merged.sources.size());
     for (std::size_t id = 0; id < reached.size(); ++id)
         EXPECT_EQ(reached[id], merged.is_object_node(std::uint32_t(id)) ? 1 : 0) << id;
