@@ -142,10 +142,10 @@ MergedTopLevel merge_top_level_items(const TopLevelBvh& top,
     const auto bvh_of = [&](const TopLevelItem& item) -> const ObjectBvhView& {
         return views[targets[item.instance_id].mesh];
     };
-    // Placed items' subtrees are copied only where all of them fit the budget. The copies
-    // are counted as the items are found, and the count stops once it is spent (a scene of
-    // many placed instances would otherwise walk every instanced node only to give up). The
-    // sum only grows, so whether it ends over the budget does not depend on the order.
+    // Placed items' subtrees are copied only where all of them fit the budget. Their nodes
+    // are counted first, and the count stops once the budget is spent (a scene of many
+    // placed instances would otherwise walk every instanced node only to give up). The sum
+    // only grows, so whether it ends over the budget does not depend on the order.
     bool merges_placed = false;
     if (settings.placed_instances) {
         std::vector<const TopLevelItem*> placed;

@@ -374,8 +374,8 @@ TEST(MergedTopLevel, HangsPlacedItemsSubtreesInWorldBoxes) {
             // space: the identity maps their corners).
             const bool is_world_space = target.space == InstanceTarget::kWorldSpace;
             if (is_hung) {
-                // A placed item naming an object leaf hangs in its slot: its box stays the
-                // item's (world space), its triangles in object space.
+                // An item naming an object leaf hangs in its slot: its box stays the item's
+                // (world space), its triangles in their object space.
                 EXPECT_EQ(copy, item.object_node);
                 const MergedLeafSource& source =
                     merged.source_of_leaves(merged.nodes[n], 1u << slot);
