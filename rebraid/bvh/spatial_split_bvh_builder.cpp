@@ -2,11 +2,12 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
+
+#include <tbb/enumerable_thread_specific.h>
 
 #include "rebraid/bvh/binned_split.h"
 #include "rebraid/bvh/object_bvh_builder.h"
@@ -60,23 +61,15 @@ struct SegmentCandidate {
     BBox3f bounds() const { return info.bounds; }
 };
 
-/// SpatialSplitSearchCounts as the build's tasks add to them.
-struct SharedSearchCounts {
-    std::atomic<std::uint64_t> candidates{0}, searches{0}, cheaper{0};
-    std::atomic<std::uint32_t> longest_fruitless_run{0};
-
-    void add_fruitless_run(std::uint32_t run) {
-        std::uint32_t longest = longest_fruitless_run.load();
-        while (run > longest && !longest_fruitless_run.compare_exchange_weak(longest, run)) {
-        }
-    }
-};
+/// SpatialSplitSearchCounts, one per thread of the build, summed when it ends: counters
+/// shared by every task would move their cache line between the cores at every range.
+using ThreadSearchCounts = tbb::enumerable_thread_specific<SpatialSplitSearchCounts>;
 
 class SpatialSplitBvhBuilder {
 public:
     SpatialSplitBvhBuilder(const Mesh& mesh, std::span<BuildPrim> refs,
                            std::span<BuildPrim> scratch, const BuildSettings& settings,
-                           SharedSearchCounts& counts)
+                           ThreadSearchCounts& counts)
         : mesh_(mesh), refs_(refs), scratch_(scratch), settings_(settings), counts_(&counts) {}
 
     /// The root's half area, against which overlaps are weighed.
@@ -96,7 +89,7 @@ public:
         if (!median_only) {
             c.split = find_binned_split(range(c), info, settings_);
             if (c.room() > 0 && n >= kMinSpatialSplitRefs) {
-                ++counts_->candidates;
+                ++counts_->local().candidates;
                 if (fruitless_searches < kMaxFruitlessSearches && overlaps_much(c))
                     search_spatial_split(c, fruitless_searches);
             }
@@ -154,9 +147,10 @@ private:
                                        settings_.parallel_threshold);
         c.is_spatial = c.spatial.is_valid() && c.spatial.cost < c.split.cost;
         c.fruitless_searches = c.is_spatial ? 0 : fruitless_searches + 1;
-        ++counts_->searches;
-        if (c.is_spatial) ++counts_->cheaper;
-        counts_->add_fruitless_run(c.fruitless_searches);
+        SpatialSplitSearchCounts& counts = counts_->local();
+        ++counts.searches;
+        if (c.is_spatial) ++counts.cheaper;
+        counts.longest_fruitless_run = std::max(counts.longest_fruitless_run, c.fruitless_searches);
     }
 
     /// Whether the boxes of the object split's halves overlap by more than a small share of
@@ -353,7 +347,7 @@ private:
     std::span<BuildPrim> refs_;
     std::span<BuildPrim> scratch_;
     const BuildSettings& settings_;
-    SharedSearchCounts* counts_;
+    ThreadSearchCounts* counts_;
 };
 
 /// Closes the gaps the segments' unused room left between leaves: leaves renumbered in the
@@ -399,7 +393,7 @@ SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& s
     const ScratchBuffer<BuildPrim> refs_buffer(capacity), scratch_buffer(capacity);
     const std::span<BuildPrim> refs = refs_buffer.span();
     std::copy(prims.begin(), prims.end(), refs.begin());
-    SharedSearchCounts counts;
+    ThreadSearchCounts counts;
     SpatialSplitBvhBuilder builder(mesh, refs, scratch_buffer.span(), settings, counts);
     const RangeInfo info =
         compute_range_info(refs.first(prims.size()), settings.parallel_threshold);
@@ -415,8 +409,13 @@ SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& s
         out.tree.root = grower.grow(root, out.tree.nodes);
     }
     out.leaf_prims = compact_leaves(out.tree, refs);
-    out.search_counts = {counts.candidates, counts.searches, counts.cheaper,
-                         counts.longest_fruitless_run};
+    for (const SpatialSplitSearchCounts& thread : counts) {
+        out.search_counts.candidates += thread.candidates;
+        out.search_counts.searches += thread.searches;
+        out.search_counts.cheaper += thread.cheaper;
+        out.search_counts.longest_fruitless_run =
+            std::max(out.search_counts.longest_fruitless_run, thread.longest_fruitless_run);
+    }
     return out;
 }
 
