@@ -138,7 +138,7 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
     accel_->set_triangle_test(triangle_test_for(converted_));
     accel_->set_world_to_object(embree_world_to_object_);
-    intersect_within_bounds_ = within_bounds_query();
+    intersect1_ = intersect1_form();
     bounds_ = converted_.scene.bounds();
     pad_bounds();
     rtcRetainScene(scene_);  // last: a throwing constructor has nothing to release
@@ -183,7 +183,8 @@ void EmbreeAccel::pad_bounds() {
     padded_centre_[3] = padded_half_[3] = 0.0f;
 }
 
-bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
+// Inline, and always: each intersect1 form compiles it for its own instruction set.
+[[gnu::always_inline]] inline bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
     // The separating axes of a line and a box: the line misses the box exactly when, for
     // some axis i, |((centre - org) x dir)_i| > half_j |dir_k| + half_k |dir_j| ((i, j, k)
     // cyclic: the box seen down the line is a hexagon whose edge normals these are). No
@@ -226,14 +227,11 @@ bool EmbreeAccel::misses_bounds(const RTCRay& ray) const noexcept {
 #endif
 }
 
-void EmbreeAccel::intersect1(RTCRayHit& rayhit) const noexcept {
-    const RTCRay& in = rayhit.ray;
+[[gnu::always_inline]] inline bool EmbreeAccel::turns_away(const RTCRay& ray) const noexcept {
     // Embree's inactive rays (tnear > tfar, or NaN bounds) and rays whose mask no geometry
     // shares are left untouched.
-    if (!(in.tnear <= in.tfar)) return;
-    if (is_ray_mask_supported_ && in.mask == 0) return;
-    if (misses_bounds(in)) return;
-    (this->*intersect_within_bounds_)(rayhit);
+    return !(ray.tnear <= ray.tfar) || (is_ray_mask_supported_ && ray.mask == 0) ||
+           misses_bounds(ray);
 }
 
 namespace {
@@ -348,31 +346,50 @@ void EmbreeAccel::intersect_finishing_terms(RTCRayHit& rayhit) const noexcept {
 
 // Each form is compiled for the instruction set of the Embree kernels it stands for (chosen
 // only where Embree runs them): the fused multiply-adds and the estimate inline with the rest.
+// Out of line (noinline): the forms of intersect1 call them past the screen.
 #if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2,fma"), flatten))
+#define REBRAID_GLUE_TARGET(isa) __attribute__((target(isa)))
+#else
+#define REBRAID_GLUE_TARGET(isa)
 #endif
-void EmbreeAccel::intersect_finishing_terms_12(RTCRayHit& rayhit) const noexcept {
+
+REBRAID_GLUE_TARGET("avx2,fma")
+[[gnu::noinline, gnu::flatten]] void EmbreeAccel::intersect_finishing_terms_12(
+    RTCRayHit& rayhit) const noexcept {
     intersect_finishing_terms<&glue::embree_reciprocal_estimate_12>(rayhit);
 }
 
-#if defined(REBRAID_GLUE_HAS_RCP_ESTIMATES) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx512f"), flatten))
-#endif
-void EmbreeAccel::intersect_finishing_terms_14(RTCRayHit& rayhit) const noexcept {
+REBRAID_GLUE_TARGET("avx512f")
+[[gnu::noinline, gnu::flatten]] void EmbreeAccel::intersect_finishing_terms_14(
+    RTCRayHit& rayhit) const noexcept {
     intersect_finishing_terms<&glue::embree_reciprocal_estimate_14>(rayhit);
 }
 
-EmbreeAccel::WithinBounds EmbreeAccel::within_bounds_query() const {
-    if (!finishes_moller_terms(*accel_, arithmetic_)) return &EmbreeAccel::intersect_observing;
+void EmbreeAccel::intersect1_observing(const EmbreeAccel& accel, RTCRayHit& rayhit) noexcept {
+    if (!accel.turns_away(rayhit.ray)) accel.intersect_observing(rayhit);
+}
+
+REBRAID_GLUE_TARGET("avx2,fma")
+void EmbreeAccel::intersect1_finishing_12(const EmbreeAccel& accel, RTCRayHit& rayhit) noexcept {
+    if (!accel.turns_away(rayhit.ray)) accel.intersect_finishing_terms_12(rayhit);
+}
+
+REBRAID_GLUE_TARGET("avx512f")
+void EmbreeAccel::intersect1_finishing_14(const EmbreeAccel& accel, RTCRayHit& rayhit) noexcept {
+    if (!accel.turns_away(rayhit.ray)) accel.intersect_finishing_terms_14(rayhit);
+}
+
+#undef REBRAID_GLUE_TARGET
+
+EmbreeAccel::Intersect1 EmbreeAccel::intersect1_form() const {
+    if (!finishes_moller_terms(*accel_, arithmetic_)) return &EmbreeAccel::intersect1_observing;
     return arithmetic_ == glue::EmbreeKernelArithmetic::fused_rcp14
-               ? &EmbreeAccel::intersect_finishing_terms_14
-               : &EmbreeAccel::intersect_finishing_terms_12;
+               ? &EmbreeAccel::intersect1_finishing_14
+               : &EmbreeAccel::intersect1_finishing_12;
 }
 
 void EmbreeAccel::occluded1(RTCRay& in) const noexcept {
-    if (!(in.tnear <= in.tfar)) return;
-    if (is_ray_mask_supported_ && in.mask == 0) return;
-    if (misses_bounds(in)) return;
+    if (turns_away(in)) return;
     const Ray ray = glue::from_embree_ray(in);
     if (accel_->occluded(ray)) in.tfar = -std::numeric_limits<float>::infinity();
 }
@@ -419,7 +436,7 @@ EmbreeUpdateReport EmbreeAccel::update() {
     accel_ = std::move(next_accel);
     pad_bounds();  // of the new top level
     embree_world_to_object_ = std::move(world_to_object);
-    intersect_within_bounds_ = within_bounds_query();
+    intersect1_ = intersect1_form();
     report.update_ms = timer.elapsed_ms();
     return report;
 }

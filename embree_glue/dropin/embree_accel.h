@@ -112,7 +112,7 @@ public:
     /// equal rtcIntersect1's to the last bit (measured: Embree's AVX2 kernels on every shared
     /// scene, its AVX and SSE4.2 kernels on random instanced triangles; its AVX-512 kernels
     /// may differ in the last bit).
-    void intersect1(RTCRayHit& rayhit) const noexcept;
+    void intersect1(RTCRayHit& rayhit) const noexcept { intersect1_(*this, rayhit); }
     /// rtcOccluded1: sets ray.tfar to -inf when any hit exists in [tnear, tfar], else leaves
     /// the ray untouched. Same ray conventions as intersect1.
     void occluded1(RTCRay& ray) const noexcept;
@@ -152,12 +152,20 @@ private:
     /// True when `ray` certainly misses every triangle: its line misses the padded scene
     /// bounds.
     bool misses_bounds(const RTCRay& ray) const noexcept;
-    /// intersect1 for an active ray that may hit something: one of the forms below, chosen
-    /// with the structure (within_bounds_query). Called through a pointer, so out of line: the
-    /// rays intersect1 turns away (most of a frame that frames a whole scene) return without
-    /// paying for the traversal's registers and stack.
-    using WithinBounds = void (EmbreeAccel::*)(RTCRayHit& rayhit) const noexcept;
-    WithinBounds within_bounds_query() const;
+    /// True when intersect1 leaves `ray` untouched without a traversal: inactive, masked off
+    /// or missing the padded bounds.
+    bool turns_away(const RTCRay& ray) const noexcept;
+    /// intersect1 in one of the forms below, chosen with the structure (intersect1_form):
+    /// each screens the ray (turns_away) compiled for the instruction set of the query it
+    /// then calls, so that the screen, which every ray pays and most rays of a frame that
+    /// frames a whole scene end at, takes the shorter encodings where the CPU has them. The
+    /// query past the screen is out of line: the rays turned away return without paying for
+    /// the traversal's registers and stack.
+    using Intersect1 = void (*)(const EmbreeAccel& accel, RTCRayHit& rayhit) noexcept;
+    Intersect1 intersect1_form() const;
+    static void intersect1_observing(const EmbreeAccel& accel, RTCRayHit& rayhit) noexcept;
+    static void intersect1_finishing_12(const EmbreeAccel& accel, RTCRayHit& rayhit) noexcept;
+    static void intersect1_finishing_14(const EmbreeAccel& accel, RTCRayHit& rayhit) noexcept;
     /// Where the query does not give Embree's own Möller terms: Embree's attributes computed
     /// again for each closer hit as it is found.
     void intersect_observing(RTCRayHit& rayhit) const noexcept;
@@ -184,11 +192,11 @@ private:
     bool has_native_packets16_ = false;
     /// How Embree rounds on this machine: the hit attributes are computed the same way.
     glue::EmbreeKernelArithmetic arithmetic_ = glue::EmbreeKernelArithmetic::separate;
-    /// intersect1's query past its early returns: where the structure's queries give Embree's
-    /// own Möller terms (a SIMD kernel, the Möller test, fused arithmetic), the closest hit's
+    /// intersect1's form (intersect1_form): where the structure's queries give Embree's own
+    /// Möller terms (a SIMD kernel, the Möller test, fused arithmetic), the closest hit's
     /// attributes are finished from them once, after the traversal, rather than computed for
     /// every closer hit as it is found.
-    WithinBounds intersect_within_bounds_ = nullptr;
+    Intersect1 intersect1_ = nullptr;
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;

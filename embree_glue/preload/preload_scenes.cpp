@@ -11,16 +11,11 @@
 #include "rebraid/core/error.h"
 
 namespace rebraid::glue {
-namespace {
 
-/// The last answer of this thread. The library is loaded at start (LD_PRELOAD), so its
-/// thread-local storage is static and read without a call.
-struct LastAnswer {
-    RTCScene scene = nullptr;
-    std::uint64_t generation = 0;
-    ServedScene served;
-};
-thread_local LastAnswer t_last_answer __attribute__((tls_model("initial-exec")));
+constinit thread_local LastServedAnswer t_last_served_answer
+    __attribute__((tls_model("initial-exec")));
+
+namespace {
 
 /// Throws rebraid::Error when a scene the structure would cover asks Embree for robust
 /// intersection: EmbreeAccel traces such a scene with the watertight test, as Embree's robust
@@ -56,13 +51,6 @@ PreloadScenes::PreloadScenes(PreloadSettings settings) : settings_(std::move(set
 
 PreloadScenes::~PreloadScenes() = default;
 
-ServedScene PreloadScenes::served(RTCScene scene) noexcept {
-    const LastAnswer& last = t_last_answer;
-    if (last.scene == scene && last.generation == generation_.load(std::memory_order_acquire))
-        return last.served;
-    return served_after_commit(scene);
-}
-
 ServedScene PreloadScenes::served_after_commit(RTCScene scene) noexcept {
     SceneState* state = nullptr;
     std::shared_ptr<tbb::collaborative_once_flag> decision;
@@ -83,7 +71,7 @@ ServedScene PreloadScenes::served_after_commit(RTCScene scene) noexcept {
         tbb::collaborative_call_once(*decision, [&] { decide(scene, *state); });
         if (state->is_served) served = {state->accel.get()};
     }
-    t_last_answer = {scene, generation, served};
+    t_last_served_answer = {scene, generation, served};
     return served;
 }
 

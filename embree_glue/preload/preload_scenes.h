@@ -33,6 +33,17 @@ struct ServedScene {
     const EmbreeAccel* accel = nullptr;  ///< null: Embree
 };
 
+/// A thread's last answer of PreloadScenes::served, valid while the generation it was given
+/// at is current. The library is loaded at start (LD_PRELOAD), so its thread-local storage is
+/// static and read without a call; constinit: no initialisation to call for either.
+struct LastServedAnswer {
+    RTCScene scene = nullptr;
+    std::uint64_t generation = 0;
+    ServedScene served;
+};
+extern constinit thread_local LastServedAnswer t_last_served_answer
+    __attribute__((tls_model("initial-exec")));
+
 class PreloadScenes final : public InterposerObserver {
 public:
     explicit PreloadScenes(PreloadSettings settings);
@@ -43,8 +54,18 @@ public:
 
     /// The structure answering the rays of `scene`; Embree's (null) when the scene was never
     /// committed or cannot be served.
-    ServedScene served(RTCScene scene) noexcept;
-
+    ServedScene served(RTCScene scene) noexcept {
+        if (const ServedScene* last = last_answer(scene)) return *last;
+        return served_after_commit(scene);
+    }
+    /// This thread's last answer for `scene` while it stands (no commit or release since),
+    /// else null. Inline: every traced ray asks, and nearly always it stands.
+    const ServedScene* last_answer(RTCScene scene) const noexcept {
+        const LastServedAnswer& last = t_last_served_answer;
+        if (last.scene == scene && last.generation == generation_.load(std::memory_order_acquire))
+            return &last.served;
+        return nullptr;
+    }
     /// Starts a new decision for the scene's next trace. A scene committed with
     /// rtcJoinCommitScene is left to Embree: a thread may trace it as soon as its own join
     /// returns, while the other joiners' calls still come in.

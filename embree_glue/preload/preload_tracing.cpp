@@ -40,18 +40,30 @@ PreloadScenes* g_scenes = nullptr;
     }
 }
 
+/// Whether a query with `context` is Embree's to answer whatever the scene.
+bool context_needs_embree(const RTCIntersectContext* context) noexcept {
+    if (context == nullptr) return false;
+    // Embree calls a context's filter function, which only it can call at the right moments.
+    // A ray the application traces from its own instancing (a user geometry's intersect
+    // function tracing another scene with the instance on the context's stack): Embree reports
+    // and limits instance levels from that stack.
+    return context->filter != nullptr || context->instID[0] != RTC_INVALID_GEOMETRY_ID;
+}
+
 /// How a query on `scene` with `context` is answered: rebraid's structure, or Embree (null).
 const EmbreeAccel* served(RTCScene scene, const RTCIntersectContext* context) noexcept {
-    if (g_scenes == nullptr) return nullptr;
-    if (context != nullptr) {
-        // Embree calls a context's filter function, which only it can call at the right moments.
-        if (context->filter != nullptr) return nullptr;
-        // A ray the application traces from its own instancing (a user geometry's intersect
-        // function tracing another scene with the instance on the context's stack): Embree
-        // reports and limits instance levels from that stack.
-        if (context->instID[0] != RTC_INVALID_GEOMETRY_ID) return nullptr;
-    }
+    if (g_scenes == nullptr || context_needs_embree(context)) return nullptr;
     return g_scenes->served(scene).accel;
+}
+
+/// served's answer where it is at hand: rebraid's structure when this thread's last answer
+/// for `scene` stands and names one; else null, and the caller asks served out of line. The
+/// single-ray queries then make no call before the structure's own on their common path, and
+/// save no registers for one.
+const EmbreeAccel* served_at_hand(RTCScene scene, const RTCIntersectContext* context) noexcept {
+    if (g_scenes == nullptr || context_needs_embree(context)) return nullptr;
+    const ServedScene* last = g_scenes->last_answer(scene);
+    return last != nullptr ? last->accel : nullptr;
 }
 
 #define REBRAID_REAL(name) static auto* const real = next_definition<decltype(name)>(#name)
@@ -156,6 +168,21 @@ T* at_stride(T* first, std::size_t byte_stride, unsigned int index) {
     return reinterpret_cast<T*>(reinterpret_cast<std::byte*>(first) + byte_stride * index);
 }
 
+/// rtcIntersect1 past served_at_hand: asks served, and forwards to Embree where it answers.
+[[gnu::noinline]] void intersect1_asking(RTCScene scene, RTCIntersectContext* context,
+                                         RTCRayHit* rayhit) {
+    if (const EmbreeAccel* accel = served(scene, context)) return accel->intersect1(*rayhit);
+    REBRAID_REAL(rtcIntersect1);
+    call_real(real, scene, context, rayhit);
+}
+
+/// rtcOccluded1 past served_at_hand, as intersect1_asking.
+[[gnu::noinline]] void occluded1_asking(RTCScene scene, RTCIntersectContext* context, RTCRay* ray) {
+    if (const EmbreeAccel* accel = served(scene, context)) return accel->occluded1(*ray);
+    REBRAID_REAL(rtcOccluded1);
+    call_real(real, scene, context, ray);
+}
+
 }  // namespace
 
 // The library is compiled with hidden visibility; Embree's names are its interface.
@@ -165,15 +192,14 @@ extern "C" {
 // ---- Single rays ---------------------------------------------------------------------------
 
 void rtcIntersect1(RTCScene scene, RTCIntersectContext* context, RTCRayHit* rayhit) {
-    if (const EmbreeAccel* accel = served(scene, context)) return accel->intersect1(*rayhit);
-    REBRAID_REAL(rtcIntersect1);
-    call_real(real, scene, context, rayhit);
+    if (const EmbreeAccel* accel = served_at_hand(scene, context))
+        return accel->intersect1(*rayhit);
+    intersect1_asking(scene, context, rayhit);
 }
 
 void rtcOccluded1(RTCScene scene, RTCIntersectContext* context, RTCRay* ray) {
-    if (const EmbreeAccel* accel = served(scene, context)) return accel->occluded1(*ray);
-    REBRAID_REAL(rtcOccluded1);
-    call_real(real, scene, context, ray);
+    if (const EmbreeAccel* accel = served_at_hand(scene, context)) return accel->occluded1(*ray);
+    occluded1_asking(scene, context, ray);
 }
 
 // ---- Packets -------------------------------------------------------------------------------
