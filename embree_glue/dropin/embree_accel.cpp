@@ -354,13 +354,13 @@ void EmbreeAccel::intersect_finishing_terms(RTCRayHit& rayhit) const noexcept {
 #endif
 
 REBRAID_GLUE_TARGET("avx2,fma")
-[[gnu::noinline, gnu::flatten]] void EmbreeAccel::intersect_finishing_terms_12(
+__attribute__((noinline, flatten)) void EmbreeAccel::intersect_finishing_terms_12(
     RTCRayHit& rayhit) const noexcept {
     intersect_finishing_terms<&glue::embree_reciprocal_estimate_12>(rayhit);
 }
 
 REBRAID_GLUE_TARGET("avx512f")
-[[gnu::noinline, gnu::flatten]] void EmbreeAccel::intersect_finishing_terms_14(
+__attribute__((noinline, flatten)) void EmbreeAccel::intersect_finishing_terms_14(
     RTCRayHit& rayhit) const noexcept {
     intersect_finishing_terms<&glue::embree_reciprocal_estimate_14>(rayhit);
 }
