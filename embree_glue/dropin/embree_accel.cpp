@@ -126,6 +126,7 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
     if (scene_ == nullptr) throw Error("EmbreeAccel: the scene is null");
     is_ray_mask_supported_ =
         scene_device_property(scene_, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+    ray_mask_unsupported_ = is_ray_mask_supported_ ? 0u : 1u;
     has_native_packets8_ =
         scene_device_property(scene_, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
     has_native_packets16_ =
@@ -172,15 +173,21 @@ void EmbreeAccel::pad_bounds() {
     // holds first, so a ray that misses it by more than rounding finds no hit. The margin is
     // far above the rounding of either test.
     const BBox3f& box = accel_->top_level().bounds;
+    float half[3];
     for (int a = 0; a < 3; ++a) {
         const float pad = 1e-3f * (box.max[a] - box.min[a]) +
                           1e-4f * std::max(std::abs(box.min[a]), std::abs(box.max[a])) + 1e-6f;
         const float low = box.min[a] - pad, high = box.max[a] + pad;
         padded_centre_[a] = 0.5f * (low + high);
         // Rounded up, so that the box stays around [low, high] whatever the centre's rounding.
-        padded_half_[a] = 0.5f * (high - low) * (1.0f + 1e-6f);
+        half[a] = 0.5f * (high - low) * (1.0f + 1e-6f);
     }
-    padded_centre_[3] = padded_half_[3] = 0.0f;
+    padded_centre_[3] = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+        padded_half_yzx_[a] = half[(a + 1) % 3];
+        padded_half_zxy_[a] = half[(a + 2) % 3];
+    }
+    padded_half_yzx_[3] = padded_half_zxy_[3] = 0.0f;
 }
 
 // Inline, and always: each intersect1 form compiles it for its own instruction set.
@@ -194,7 +201,8 @@ void EmbreeAccel::pad_bounds() {
     // the products' size; NaN or infinities in the ray compare false and go on as well.
 #ifdef REBRAID_GLUE_SSE
     // RTCRay keeps (org, tnear) and (dir, time) in two groups of four floats: one load each
-    // (lane 3 is left out of the answer).
+    // (lane 3 is left out of the answer). The box's half extents are kept in the two lane
+    // orders the test multiplies them in.
     static_assert(offsetof(RTCRay, tnear) == 12 && offsetof(RTCRay, dir_x) == 16 &&
                   offsetof(RTCRay, time) == 28);
     const __m128 to_centre = _mm_sub_ps(_mm_load_ps(padded_centre_), _mm_loadu_ps(&ray.org_x));
@@ -202,14 +210,14 @@ void EmbreeAccel::pad_bounds() {
     const auto yzx = [](__m128 v) { return _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 0, 2, 1)); };
     const auto zxy = [](__m128 v) { return _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 1, 0, 2)); };
     const __m128 sign = _mm_set1_ps(-0.0f);
-    const __m128 first = _mm_mul_ps(yzx(to_centre), zxy(dir));
-    const __m128 second = _mm_mul_ps(zxy(to_centre), yzx(dir));
+    const __m128 dir_yzx = yzx(dir), dir_zxy = zxy(dir);
+    const __m128 first = _mm_mul_ps(yzx(to_centre), dir_zxy);
+    const __m128 second = _mm_mul_ps(zxy(to_centre), dir_yzx);
     const __m128 cross = _mm_andnot_ps(sign, _mm_sub_ps(first, second));
     const __m128 size = _mm_add_ps(_mm_andnot_ps(sign, first), _mm_andnot_ps(sign, second));
-    const __m128 abs_dir = _mm_andnot_ps(sign, dir);
-    const __m128 half = _mm_load_ps(padded_half_);
     const __m128 reach =
-        _mm_add_ps(_mm_mul_ps(yzx(half), zxy(abs_dir)), _mm_mul_ps(zxy(half), yzx(abs_dir)));
+        _mm_add_ps(_mm_mul_ps(_mm_load_ps(padded_half_yzx_), _mm_andnot_ps(sign, dir_zxy)),
+                   _mm_mul_ps(_mm_load_ps(padded_half_zxy_), _mm_andnot_ps(sign, dir_yzx)));
     const __m128 limit = _mm_add_ps(reach, _mm_mul_ps(size, _mm_set1_ps(kLineTestTolerance)));
     return (_mm_movemask_ps(_mm_cmpgt_ps(cross, limit)) & 7) != 0;
 #else
@@ -219,7 +227,8 @@ void EmbreeAccel::pad_bounds() {
     for (int i = 0; i < 3; ++i) {
         const int j = (i + 1) % 3, k = (i + 2) % 3;
         const float first = to_centre[j] * dir[k], second = to_centre[k] * dir[j];
-        const float reach = padded_half_[j] * std::abs(dir[k]) + padded_half_[k] * std::abs(dir[j]);
+        const float reach =
+            padded_half_yzx_[i] * std::abs(dir[k]) + padded_half_zxy_[i] * std::abs(dir[j]);
         const float limit = reach + (std::abs(first) + std::abs(second)) * kLineTestTolerance;
         if (std::abs(first - second) > limit) return true;
     }
@@ -230,7 +239,7 @@ void EmbreeAccel::pad_bounds() {
 [[gnu::always_inline]] inline bool EmbreeAccel::turns_away(const RTCRay& ray) const noexcept {
     // Embree's inactive rays (tnear > tfar, or NaN bounds) and rays whose mask no geometry
     // shares are left untouched.
-    return !(ray.tnear <= ray.tfar) || (is_ray_mask_supported_ && ray.mask == 0) ||
+    return !(ray.tnear <= ray.tfar) || (ray.mask | ray_mask_unsupported_) == 0 ||
            misses_bounds(ray);
 }
 

@@ -188,6 +188,9 @@ private:
     EmbreeAccelSettings settings_;
     ObjectBvhBuilder object_builder_;
     bool is_ray_mask_supported_ = false;
+    /// 1 where Embree ignores ray masks, else 0: a ray is masked off when its mask or'd with
+    /// this is 0 (one test where two branches were).
+    std::uint32_t ray_mask_unsupported_ = 1;
     bool has_native_packets8_ = false;
     bool has_native_packets16_ = false;
     /// How Embree rounds on this machine: the hit attributes are computed the same way.
@@ -200,11 +203,13 @@ private:
     glue::ConvertedEmbreeScene converted_;
     std::unique_ptr<InstancedAccel> accel_;
     BBox3f bounds_;
-    /// The top level's box with a margin, as its centre and half extents (x, y, z, then 0):
-    /// rays whose line misses it return before the traversal (most rays of a frame framing a
-    /// whole scene miss every object).
+    /// The top level's box with a margin, as its centre (x, y, z, then 0) and its half
+    /// extents in the two orders misses_bounds multiplies them in ((y, z, x, 0) and
+    /// (z, x, y, 0)): rays whose line misses it return before the traversal (most rays of a
+    /// frame framing a whole scene miss every object).
     alignas(16) float padded_centre_[4] = {};
-    alignas(16) float padded_half_[4] = {};
+    alignas(16) float padded_half_yzx_[4] = {};
+    alignas(16) float padded_half_zxy_[4] = {};
     /// index = InstanceId: Embree's world-to-object map of the instance (its float inverse of
     /// the registered transform, rounded as Embree rounds it); unused for root-scene meshes.
     std::vector<AffineTransform> embree_world_to_object_;

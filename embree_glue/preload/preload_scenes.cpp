@@ -49,7 +49,10 @@ std::string describe_structure(const EmbreeAccel& accel, double ms) {
 
 PreloadScenes::PreloadScenes(PreloadSettings settings) : settings_(std::move(settings)) {}
 
-PreloadScenes::~PreloadScenes() = default;
+PreloadScenes::~PreloadScenes() {
+    // The threads' last answers may name what this object built.
+    generation_.fetch_add(1, std::memory_order_release);
+}
 
 ServedScene PreloadScenes::served_after_commit(RTCScene scene) noexcept {
     SceneState* state = nullptr;

@@ -59,8 +59,9 @@ public:
         return served_after_commit(scene);
     }
     /// This thread's last answer for `scene` while it stands (no commit or release since),
-    /// else null. Inline: every traced ray asks, and nearly always it stands.
-    const ServedScene* last_answer(RTCScene scene) const noexcept {
+    /// else null. Inline: every traced ray asks, and nearly always it stands. Static: the
+    /// generation is the process's, so that asking needs no PreloadScenes.
+    static const ServedScene* last_answer(RTCScene scene) noexcept {
         const LastServedAnswer& last = t_last_served_answer;
         if (last.scene == scene && last.generation == generation_.load(std::memory_order_acquire))
             return &last.served;
@@ -94,7 +95,10 @@ private:
     const PreloadSettings settings_;
     mutable std::mutex mutex_;
     std::unordered_map<RTCScene, SceneState> scenes_;
-    std::atomic<std::uint64_t> generation_{1};
+    /// Counts the commits, releases and PreloadScenes destroyed in the process: an answer
+    /// given at an earlier generation does not stand. One for the process, as the threads'
+    /// last answers are.
+    static inline constinit std::atomic<std::uint64_t> generation_{1};
 };
 
 }  // namespace rebraid::glue

@@ -61,8 +61,9 @@ const EmbreeAccel* served(RTCScene scene, const RTCIntersectContext* context) no
 /// single-ray queries then make no call before the structure's own on their common path, and
 /// save no registers for one.
 const EmbreeAccel* served_at_hand(RTCScene scene, const RTCIntersectContext* context) noexcept {
-    if (g_scenes == nullptr || context_needs_embree(context)) return nullptr;
-    const ServedScene* last = g_scenes->last_answer(scene);
+    // Only a PreloadScenes gives answers: without one (g_scenes null) none stands.
+    if (context_needs_embree(context)) return nullptr;
+    const ServedScene* last = PreloadScenes::last_answer(scene);
     return last != nullptr ? last->accel : nullptr;
 }
 
