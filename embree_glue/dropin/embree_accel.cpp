@@ -420,6 +420,19 @@ EmbreeUpdateReport EmbreeAccel::update() {
         for (std::size_t m = 0; m < next.scene.meshes.size(); ++m)
             if (next.scene.meshes[m].positions != converted_.scene.meshes[m].positions)
                 changed.push_back(MeshId(m));
+        bool is_moved = false;
+        for (std::size_t i = 0; i < next.scene.instances.size(); ++i)
+            is_moved = is_moved || next.scene.instances[i].object_to_world !=
+                                       converted_.scene.instances[i].object_to_world;
+        if (changed.empty() && !is_moved) {
+            // A commit that changed nothing the structure depends on: it stays as it is.
+            report.meshes_unchanged = std::uint32_t(next.scene.meshes.size());
+            accel_->set_triangle_test(triangle_test_for(next));
+            converted_ = std::move(next);
+            intersect1_ = intersect1_form();
+            report.update_ms = timer.elapsed_ms();
+            return report;
+        }
         // Unchanged object BVHs are copied: InstancedAccel owns its BVHs, and the current
         // structure must stay intact until the new one is complete.
         std::vector<ObjectBvh> object_bvhs = accel_->object_bvhs();
@@ -435,7 +448,12 @@ EmbreeUpdateReport EmbreeAccel::update() {
         for (UpdateStrategy strategy : applied)
             ++(strategy == UpdateStrategy::rebuild ? report.meshes_rebuilt : report.meshes_refit);
         report.meshes_unchanged = std::uint32_t(next.scene.meshes.size() - changed.size());
-        next_accel = build_top(next.scene, std::move(object_bvhs), settings_.rebraid, timer);
+        // Moving instances and deforming meshes update the merged top level, which rebuilds
+        // in milliseconds; the world tree, a build over every instanced triangle, is made
+        // with full builds only.
+        RebraidSettings top_settings = settings_.rebraid;
+        top_settings.world_tree = false;
+        next_accel = build_top(next.scene, std::move(object_bvhs), top_settings, timer);
     }
     next_accel->set_triangle_test(triangle_test_for(next));
     std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);

@@ -40,13 +40,17 @@ struct EmbreeAccelSettings {
     /// placed instances are merged into the traced tree (merge_placed_instances: world-space
     /// boxes, object-space triangles, the same bits) while their copies hold at most 4 times
     /// the object BVHs' nodes: Embree's viewer under the preload traced brainstem, fzk_haus
-    /// and two_cylinder_engine 2-5 % faster, at 0.4-1.1 MB more (docs/design.md).
+    /// and two_cylinder_engine 2-5 % faster, at 0.4-1.1 MB more (docs/design.md). Where the
+    /// instanced triangles are at most twice the meshes', a full build traces a world tree
+    /// instead (world_tree: rebraid/top_level/world_tree.h; docs/embree.md), and update()
+    /// after instances or vertices moved the merged top level.
     RebraidSettings rebraid = [] {
         RebraidSettings settings;
         settings.world_space_single_instances = false;
         settings.world_space_copy_budget = 0.0f;
         settings.merge_placed_instances = true;
         settings.merge_placed_node_budget = 4.0f;
+        settings.world_tree = true;
         return settings;
     }();
     /// How update() brings the object BVHs of deformed meshes up to date (refit, rotations,

@@ -251,6 +251,10 @@ const std::vector<VariantKey>& variant_keys() {
                       {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"merge-placed-budget", real_number(&Settings::merge_placed_node_budget)},
         {"items-out-of-line", real_number(&Settings::merge_items_out_of_line_area_share)},
+        {"world-tree", named_choice(&Settings::world_tree,
+                                    {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
+        {"world-tree-budget", real_number(&Settings::world_tree_triangle_budget)},
+        {"world-tree-splits", real_number(&Settings::world_tree_spatial_split_budget)},
         {"top-collapse",
          {[](const VariantValue& value, AccelOptions& options) {
               options.rebraid.build.collapse =

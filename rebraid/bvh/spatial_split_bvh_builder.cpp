@@ -69,8 +69,13 @@ class SpatialSplitBvhBuilder {
 public:
     SpatialSplitBvhBuilder(const Mesh& mesh, std::span<BuildPrim> refs,
                            std::span<BuildPrim> scratch, const BuildSettings& settings,
-                           ThreadSearchCounts& counts)
-        : mesh_(mesh), refs_(refs), scratch_(scratch), settings_(settings), counts_(&counts) {}
+                           std::span<const std::uint32_t> leaf_groups, ThreadSearchCounts& counts)
+        : mesh_(mesh),
+          refs_(refs),
+          scratch_(scratch),
+          settings_(settings),
+          leaf_groups_(leaf_groups),
+          counts_(&counts) {}
 
     /// The root's half area, against which overlaps are weighed.
     void set_root_area(float half_area) { root_area_ = half_area; }
@@ -95,14 +100,14 @@ public:
             }
         }
         if (!c.split.is_valid() && !c.is_spatial) {
-            c.is_leaf = n <= settings_.max_leaf_size;
+            c.is_leaf = n <= settings_.max_leaf_size && !mixes_groups(c);
             return c;
         }
         const float children_cost = c.is_spatial ? c.spatial.cost : c.split.cost;
         const float leaf_cost = settings_.intersection_cost * c.half_area * float(info.weight);
         const float split_cost =
             settings_.traversal_cost * c.half_area + settings_.intersection_cost * children_cost;
-        c.is_leaf = n <= settings_.max_leaf_size && leaf_cost <= split_cost;
+        c.is_leaf = n <= settings_.max_leaf_size && leaf_cost <= split_cost && !mixes_groups(c);
         return c;
     }
 
@@ -139,6 +144,16 @@ public:
     }
 
 private:
+    /// Whether the references of `c` belong to more than one leaf group (never when the build
+    /// has none). Asked of ranges small enough to be leaves only.
+    bool mixes_groups(const SegmentCandidate& c) const {
+        if (leaf_groups_.empty()) return false;
+        const std::span<BuildPrim> refs = range(c);
+        return std::any_of(refs.begin(), refs.end(), [&](const BuildPrim& ref) {
+            return leaf_groups_[ref.id] != leaf_groups_[refs.front().id];
+        });
+    }
+
     /// Weighs the best spatial split of `c` (with room and at least kMinSpatialSplitRefs
     /// references) against its object split, and counts the search.
     void search_spatial_split(SegmentCandidate& c, std::uint32_t fruitless_searches) const {
@@ -347,6 +362,7 @@ private:
     std::span<BuildPrim> refs_;
     std::span<BuildPrim> scratch_;
     const BuildSettings& settings_;
+    std::span<const std::uint32_t> leaf_groups_;  ///< per triangle; empty: none
     ThreadSearchCounts* counts_;
 };
 
@@ -376,12 +392,14 @@ std::vector<PrimId> compact_leaves(WideBvh& tree, std::span<const BuildPrim> ref
 
 }  // namespace
 
-SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& settings) {
+SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& settings,
+                                        std::span<const std::uint32_t> leaf_groups) {
     settings.validate();
-    if (!(settings.spatial_split_budget > 0.0f) || settings.collapse != NodeCollapse::optimal)
-        throw Error(
-            "build_spatial_split_bvh: needs spatial_split_budget > 0 and the optimal node "
-            "collapse");
+    if (settings.collapse != NodeCollapse::optimal)
+        throw Error("build_spatial_split_bvh: needs the optimal node collapse");
+    if (!leaf_groups.empty() && leaf_groups.size() != mesh.triangles.size())
+        throw Error("build_spatial_split_bvh: " + std::to_string(leaf_groups.size()) +
+                    " leaf groups for " + std::to_string(mesh.triangles.size()) + " triangles");
     const std::vector<BuildPrim> prims = make_triangle_build_prims(mesh);
     const std::uint64_t capacity =
         prims.size() + std::uint64_t(double(prims.size()) * settings.spatial_split_budget);
@@ -394,7 +412,8 @@ SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& s
     const std::span<BuildPrim> refs = refs_buffer.span();
     std::copy(prims.begin(), prims.end(), refs.begin());
     ThreadSearchCounts counts;
-    SpatialSplitBvhBuilder builder(mesh, refs, scratch_buffer.span(), settings, counts);
+    SpatialSplitBvhBuilder builder(mesh, refs, scratch_buffer.span(), settings, leaf_groups,
+                                   counts);
     const RangeInfo info =
         compute_range_info(refs.first(prims.size()), settings.parallel_threshold);
     builder.set_root_area(info.bounds.half_area());

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "rebraid/bvh/build_settings.h"
@@ -40,9 +41,13 @@ struct SpatialSplitBvh {
 /// (as the re-braiding paper's budgeted segments, §5.2), so the tree depends on the input and
 /// the settings only, never on the threads. Below four searches in a row on the way down that
 /// found no spatial split cheaper than the object split, ranges search no more (splits rarely
-/// pay there). Nodes are cut from the binary tree by the optimal collapse. Throws
-/// rebraid::Error unless settings.spatial_split_budget > 0 and settings.collapse ==
-/// NodeCollapse::optimal (BuildSettings::validate).
-SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& settings);
+/// pay there). Nodes are cut from the binary tree by the optimal collapse. A budget of 0 leaves
+/// no room: object splits only. `leaf_groups`, when not empty, gives each triangle a group,
+/// and no leaf holds triangles of two groups (a range that mixes them is split further,
+/// whatever the SAH says). Throws rebraid::Error unless settings.collapse ==
+/// NodeCollapse::optimal (BuildSettings::validate), or when `leaf_groups` is neither empty nor
+/// one per triangle.
+SpatialSplitBvh build_spatial_split_bvh(const Mesh& mesh, const BuildSettings& settings,
+                                        std::span<const std::uint32_t> leaf_groups = {});
 
 }  // namespace rebraid

@@ -44,6 +44,10 @@ void RebraidSettings::validate() const {
           "merge_placed_node_budget", merge_placed_node_budget, "must be finite and >= 0");
     check(merge_items_out_of_line_area_share >= 0.0f, "merge_items_out_of_line_area_share",
           merge_items_out_of_line_area_share, "must be >= 0 (infinity: always)");
+    check(std::isfinite(world_tree_triangle_budget) && world_tree_triangle_budget >= 0.0f,
+          "world_tree_triangle_budget", world_tree_triangle_budget, "must be finite and >= 0");
+    check(world_tree_spatial_split_budget >= 0.0f && world_tree_spatial_split_budget <= 4.0f,
+          "world_tree_spatial_split_budget", world_tree_spatial_split_budget, "must be in [0, 4]");
     check(std::isfinite(budget_search_extra_gain) && budget_search_extra_gain >= 0.0f,
           "budget_search_extra_gain", budget_search_extra_gain, "must be finite and >= 0");
     check(std::isfinite(budget_search_min_use) && budget_search_min_use >= 0.0f &&

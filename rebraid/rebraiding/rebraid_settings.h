@@ -210,6 +210,15 @@ struct RebraidSettings {
     /// share of the root's, queries enter them out of line
     /// (TopLevelMergeSettings::items_out_of_line_area_share).
     float merge_items_out_of_line_area_share = 0.5f;
+    /// Trace a world tree instead (TopLevelMergeSettings::world_tree; world_tree.h): one BVH
+    /// over every instance's triangles, built in world space with spatial splits of
+    /// `world_tree_spatial_split_budget`, whose leaves keep their instance's object space,
+    /// where the instanced triangles are at most `world_tree_triangle_budget` times the
+    /// meshes'. The top level is still built (statistics, updates); the world tree is what
+    /// queries traverse.
+    bool world_tree = false;
+    float world_tree_triangle_budget = 2.0f;
+    float world_tree_spatial_split_budget = kStaticSpatialSplitBudget;
     /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
     /// cover at least this fraction of its box (estimated on a grid over the segment).
     float overlap_threshold = 0.25f;
@@ -227,10 +236,15 @@ struct RebraidSettings {
 
     /// What the traced tree merges (InstancedAccel's `merge`).
     TopLevelMergeSettings merge_settings() const {
-        return {.world_space = merge_world_space,
-                .placed_instances = merge_placed_instances,
-                .placed_node_budget = merge_placed_node_budget,
-                .items_out_of_line_area_share = merge_items_out_of_line_area_share};
+        TopLevelMergeSettings merge{
+            .world_space = merge_world_space,
+            .placed_instances = merge_placed_instances,
+            .placed_node_budget = merge_placed_node_budget,
+            .items_out_of_line_area_share = merge_items_out_of_line_area_share,
+            .world_tree = world_tree,
+            .world_tree_triangle_budget = world_tree_triangle_budget};
+        merge.world_tree_build.spatial_split_budget = world_tree_spatial_split_budget;
+        return merge;
     }
 
     /// Throws rebraid::Error naming the field and value when a setting is out of range.

@@ -16,6 +16,7 @@
 #include "rebraid/top_level/bvh_stats.h"
 #include "rebraid/top_level/trace_kernels.h"
 #include "rebraid/top_level/two_level_builder.h"
+#include "rebraid/top_level/world_tree.h"
 
 namespace rebraid {
 namespace {
@@ -118,7 +119,9 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
     });
     share_object_spaces(instance_targets_);
     // Part of the top level's build time too: it is made again with every top level.
-    if (merge.world_space || merge.placed_instances) {
+    if (wants_world_tree(scene, merge))
+        merged_ = build_world_tree(scene, instance_targets_, merge.world_tree_build);
+    if (merged_.empty() && (merge.world_space || merge.placed_instances)) {
         std::uint64_t object_nodes = 0;
         for (const ObjectBvh& bvh : object_bvhs_) object_nodes += bvh.nodes.size();
         merged_ = merge_top_level_items(top_, instance_targets_, object_views_, object_to_world_,
@@ -153,6 +156,10 @@ void InstancedAccel::use_kernels(SimdLevel level, TriangleTest test) {
         intersect_ = kernels.sole_item_intersect;
         occluded_ = kernels.sole_item_occluded;
         intersect_located_ = kernels.sole_item_intersect_located;
+    } else if (!merged_.empty() && merged_.is_world_tree) {
+        intersect_ = kernels.world_tree_intersect;
+        occluded_ = kernels.world_tree_occluded;
+        intersect_located_ = kernels.world_tree_intersect_located;
     } else if (!merged_.empty() && merged_.enters_items_out_of_line) {
         intersect_ = kernels.merged_rare_items_intersect;
         occluded_ = kernels.merged_rare_items_occluded;
@@ -226,6 +233,12 @@ AccelStats InstancedAccel::stats() const {
         hash.add<WideNode>(bvh.nodes);
         hash.add_value(bvh.root);
         hash.add<PrimId>(bvh.prim_ids);
+    }
+    if (!merged_.world_tree_leaves.prim_ids.empty()) {
+        // A world tree is built from the scene, not from the structures above.
+        hash.add<WideNode>(merged_.nodes);
+        hash.add_value(merged_.root);
+        hash.add<PrimId>(merged_.world_tree_leaves.prim_ids);
     }
     memory += object_to_world_.size() * sizeof(AffineTransform) +
               instance_targets_.size() * sizeof(InstanceTarget) +

@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "rebraid/bvh/build_settings.h"
 #include "rebraid/bvh/object_bvh.h"
 #include "rebraid/bvh/wide_node.h"
 #include "rebraid/core/transform.h"
@@ -54,6 +55,16 @@ struct TopLevelMergeSettings {
     /// 1.03 / 1.03, cg57_cruiser (0.25) 1.04 / 1.02, fzk_haus (1.58; 0.73 entries per diffuse
     /// ray) 0.94 / 0.96.
     float items_out_of_line_area_share = 0.5f;
+    /// Instead of copying object subtrees, trace a world tree (world_tree.h): one BVH over every
+    /// instance's triangles, built in world space with spatial splits that cut across
+    /// instances, whose leaves each hold triangles of one instance, kept in object space and
+    /// tested as the placed items' leaves are. Built only for scenes of more than one
+    /// instance whose instanced triangles are at most `world_tree_triangle_budget` times
+    /// their meshes' triangles (the tree holds a copy of every instanced triangle).
+    bool world_tree = false;
+    float world_tree_triangle_budget = 2.0f;
+    /// The world tree's build: the object builder's settings, spatial splits included.
+    BuildSettings world_tree_build = static_object_build_settings();
 };
 
 /// A top level with the object nodes of its items copied in: one tree that a ray
@@ -115,6 +126,13 @@ struct MergedTopLevel {
     std::uint32_t rows_prefetch_from = NodeRef::kEmptyBits;
     /// The top level's root; empty when nothing was merged (traversal takes the top level).
     NodeRef root = NodeRef::empty();
+    /// Whether this is a world tree (world_tree.h), traced by its own queries: every leaf
+    /// slot names its own source, where elsewhere a node's leaves share one.
+    bool is_world_tree = false;
+    /// A world tree's leaves (world_tree.h): its triangles, rows and primIDs in leaf order,
+    /// which every source points into (its nodes are `nodes`); empty otherwise. The sources'
+    /// pointers stay valid when the MergedTopLevel moves, not when it is copied.
+    ObjectBvh world_tree_leaves;
 
     bool empty() const { return root.is_empty(); }
     bool is_object_node(std::uint32_t node_id) const { return node_id >= first_object_node; }
@@ -136,7 +154,8 @@ struct MergedTopLevel {
         return sources[word & ~kSourceWordFlag];
     }
     std::uint64_t memory_bytes() const {
-        return nodes.size() * sizeof(WideNode) + sources.size() * sizeof(MergedLeafSource);
+        return nodes.size() * sizeof(WideNode) + sources.size() * sizeof(MergedLeafSource) +
+               world_tree_leaves.memory_bytes();
     }
 };
 

@@ -446,6 +446,29 @@ struct MergedLeafVisitor {
     bool operator()(NodeRef leaf) { return items(leaf); }
 };
 
+/// The leaf visitor of a world tree (world_tree.h; traverse_bvh's LeafVisits::by_node): every
+/// leaf child is an object leaf, each of the source its hint word names, and goes to
+/// `leaves(source, refs, slot_bit)` on its own. Grouping a node's leaves by source (one call
+/// per source) traced slower than a call per leaf.
+template <class Leaves>
+struct WorldTreeLeafVisitor {
+    const MergedTopLevel& tree;
+    Leaves leaves;
+
+    unsigned sibling_leaf_slots(const WideNode& node) const { return leaf_slots(node); }
+    bool operator()(const WideNode& node, unsigned slots) {
+        do {
+            const int slot = std::countr_zero(slots);
+            slots &= slots - 1;
+            if (leaves(tree.source_named_by(node.leaf_row_hints[slot]), node.children, 1u << slot))
+                return true;
+        } while (slots != 0);
+        return false;
+    }
+    /// Never called: no leaf is left for one-by-one visits.
+    bool operator()(NodeRef) { return false; }
+};
+
 /// The ray the triangles of merged `source` are tested with: the world ray, or for a placed
 /// instance's subtree the ray mapped into its space (ObjectRayCache). The source's own copy of
 /// the space decides, so a world-space source never reads its instance's record.
@@ -482,11 +505,10 @@ auto with_merged_lanes([[maybe_unused]] const MergedTopLevel& merged, Query&& qu
 /// those turn into a primID when the query ends); `located` and `observer` as for
 /// instanced_closest_hit.
 template <TriangleTest kTest, class Lanes>
-void closest_in_merged_leaves(const MergedLeafSource& source, const NodeRef* refs, unsigned slots,
-                              const TriangleGroupRay& ray, float tnear, float& tfar, Hit& hit,
-                              const PrimId*& hit_prim_ids, TraversalCounters* counters,
+void closest_in_merged_leaves(Lanes& lanes, const MergedLeafSource& source, const NodeRef* refs,
+                              unsigned slots, const TriangleGroupRay& ray, float tnear, float& tfar,
+                              Hit& hit, const PrimId*& hit_prim_ids, TraversalCounters* counters,
                               HitTriangle* located, const CloserHitObserver* observer) {
-    Lanes lanes = source_lanes<Lanes>(source);
     const auto test_lanes = [&] {
         TriangleGroupHit group_hit;
         if (lanes.template intersect<kTest>(
@@ -517,18 +539,36 @@ void closest_in_merged_leaves(const MergedLeafSource& source, const NodeRef* ref
     test_each_leaf(lanes, refs, slots, counters, test_lanes, [] { return false; });
 }
 
+/// closest_in_merged_leaves over the source's own lanes.
+template <TriangleTest kTest, class Lanes>
+void closest_in_merged_leaves(const MergedLeafSource& source, const NodeRef* refs, unsigned slots,
+                              const TriangleGroupRay& ray, float tnear, float& tfar, Hit& hit,
+                              const PrimId*& hit_prim_ids, TraversalCounters* counters,
+                              HitTriangle* located, const CloserHitObserver* observer) {
+    Lanes lanes = source_lanes<Lanes>(source);
+    closest_in_merged_leaves<kTest>(lanes, source, refs, slots, ray, tnear, tfar, hit, hit_prim_ids,
+                                    counters, located, observer);
+}
+
 /// Whether the ray hits a triangle among the object leaves `slots` of `refs`, of merged
 /// `source`, tested with `ray` (the world ray, or the ray mapped into the source's space).
 template <TriangleTest kTest, class Lanes>
-bool occluded_in_merged_leaves(const MergedLeafSource& source, const NodeRef* refs, unsigned slots,
+bool occluded_in_merged_leaves(Lanes& lanes, const NodeRef* refs, unsigned slots,
                                const TriangleGroupRay& ray, float tnear, float tfar) {
-    Lanes lanes = source_lanes<Lanes>(source);
     bool is_occluded = false;
     const auto test_lanes = [&] {
         is_occluded = is_occluded || lanes.template occluded<kTest>(ray, tnear, tfar);
     };
     test_each_leaf(lanes, refs, slots, nullptr, test_lanes, [&] { return is_occluded; });
     return is_occluded;
+}
+
+/// occluded_in_merged_leaves over the leaves of merged `source`.
+template <TriangleTest kTest, class Lanes>
+bool occluded_in_merged_leaves(const MergedLeafSource& source, const NodeRef* refs, unsigned slots,
+                               const TriangleGroupRay& ray, float tnear, float tfar) {
+    Lanes lanes = source_lanes<Lanes>(source);
+    return occluded_in_merged_leaves<kTest>(lanes, refs, slots, ray, tnear, tfar);
 }
 
 /// What a merged query's out-of-line part found (closest_in_placed_leaves,
@@ -711,6 +751,65 @@ template <TriangleTest kTest, bool kItemsOutOfLine>
     });
 }
 
+/// The closest hit in a world tree (world_tree.h; MergedTopLevel::is_world_tree): one
+/// traversal, nearest node first, and each leaf tested with the ray in its source's space,
+/// mapped when the space differs from the last leaf's (ObjectRayCache); `located` and
+/// `observer` as for instanced_closest_hit.
+template <TriangleTest kTest>
+Hit world_tree_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
+                           HitTriangle* located, const CloserHitObserver* observer) {
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
+        count_root_visit(counters);
+        return Hit{};
+    }
+    const MergedTopLevel& tree = accel.merged_top_level();
+    return with_merged_lanes(tree, [&]<class Lanes>() {
+        Hit hit;
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+        ObjectRayCache object_rays(world_ray);
+        const PrimId* hit_prim_ids = nullptr;
+        // Every source's leaves are in the same arrays: the rows' address never waits on the
+        // source's record, only the ray's mapping does.
+        Lanes lanes = source_lanes<Lanes>(tree.sources.front());
+        const auto leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
+                                unsigned slots) {
+            TraversalRay& traversal = world_ray.ray;
+            closest_in_merged_leaves<kTest>(
+                lanes, source, refs, slots, source_triangle_ray(source, world_ray, object_rays),
+                traversal.tnear, traversal.tfar, hit, hit_prim_ids, counters, located, observer);
+            return false;
+        };
+        WorldTreeLeafVisitor<decltype(leaves)> visitor{tree, leaves};
+        traverse_bvh<TraversalOrder::nearest_first, LeafVisits::by_node>(
+            tree.nodes.data(), tree.root, world_ray, counters, visitor);
+        if (hit_prim_ids != nullptr) hit.prim_id = hit_prim_ids[hit.prim_id];
+        return hit;
+    });
+}
+
+template <TriangleTest kTest>
+[[gnu::flatten]] bool world_tree_occluded(const InstancedAccel& accel, const Ray& ray) {
+    const DirectionReciprocals reciprocals(ray.dir);
+    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
+    const MergedTopLevel& tree = accel.merged_top_level();
+    return with_merged_lanes(tree, [&]<class Lanes>() {
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+        ObjectRayCache object_rays(world_ray);
+        Lanes lanes = source_lanes<Lanes>(tree.sources.front());  // every source's arrays
+        const auto leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
+                                unsigned slots) {
+            return occluded_in_merged_leaves<kTest>(
+                lanes, refs, slots, source_triangle_ray(source, world_ray, object_rays), ray.tnear,
+                ray.tfar);
+        };
+        WorldTreeLeafVisitor<decltype(leaves)> visitor{tree, leaves};
+        // Any order: the first hit ends the query.
+        return traverse_bvh<TraversalOrder::any, LeafVisits::by_node>(tree.nodes.data(), tree.root,
+                                                                      world_ray, nullptr, visitor);
+    });
+}
+
 // The two entry points of a closest-hit query of an instanced structure (the general one,
 // instanced_closest_hit, and the one-item one, sole_item_closest_hit): the plain hit, and the
 // located hit with its observer.
@@ -745,7 +844,10 @@ inline constexpr TraceKernels kLevelTraceKernels{
     &intersect_located_entry<&merged_closest_hit<kTest, false>>,
     &intersect_entry<&merged_closest_hit<kTest, true>>,
     &merged_occluded<kTest, true>,
-    &intersect_located_entry<&merged_closest_hit<kTest, true>>};
+    &intersect_located_entry<&merged_closest_hit<kTest, true>>,
+    &intersect_entry<&world_tree_closest_hit<kTest>>,
+    &world_tree_occluded<kTest>,
+    &intersect_located_entry<&world_tree_closest_hit<kTest>>};
 
 /// This level's entry points with the triangle test `test`.
 inline const TraceKernels& level_trace_kernels(TriangleTest test) {

@@ -44,6 +44,13 @@ struct TraceKernels {
     bool (*merged_rare_items_occluded)(const InstancedAccel& accel, const Ray& ray);
     LocatedHit (*merged_rare_items_intersect_located)(const InstancedAccel& accel, const Ray& ray,
                                                       const CloserHitObserver* observer);
+    /// The three instanced queries for a world tree (world_tree.h): one traversal whose
+    /// leaves are tested in their instances' spaces, source by source.
+    Hit (*world_tree_intersect)(const InstancedAccel& accel, const Ray& ray,
+                                TraversalCounters* counters);
+    bool (*world_tree_occluded)(const InstancedAccel& accel, const Ray& ray);
+    LocatedHit (*world_tree_intersect_located)(const InstancedAccel& accel, const Ray& ray,
+                                               const CloserHitObserver* observer);
 };
 
 /// The kernels of `level` with the triangle test `test`. Throws rebraid::Error when this build

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -235,6 +236,50 @@ TEST(SpatialSplitBvh, DegenerateMeshesBuildAndHitAsEmbree) {
     EXPECT_TRUE(empty.root.is_empty());
 }
 
+/// The groups of the triangles of each leaf of `built`.
+std::vector<std::vector<std::uint32_t>> leaf_group_sets(const SpatialSplitBvh& built,
+                                                        const std::vector<std::uint32_t>& groups) {
+    std::vector<std::vector<std::uint32_t>> sets;
+    const auto add = [&](NodeRef leaf) {
+        std::vector<std::uint32_t>& set = sets.emplace_back();
+        for (std::uint32_t i = 0; i < leaf.prim_count(); ++i)
+            set.push_back(groups[built.leaf_prims[leaf.first_prim() + i]]);
+    };
+    if (built.tree.root.is_leaf()) add(built.tree.root);
+    for (const WideNode& node : built.tree.nodes)
+        for (const NodeRef child : node.children)
+            if (child.is_leaf() && !child.is_empty()) add(child);
+    return sets;
+}
+
+TEST(SpatialSplitBvh, LeavesNeverMixGroups) {
+    // Groups interleaved in space (every third triangle), so that the SAH would gladly put
+    // triangles of several groups in one leaf.
+    const Mesh mesh = long_triangles(3000, 8);
+    std::vector<std::uint32_t> groups(mesh.triangles.size());
+    for (std::size_t i = 0; i < groups.size(); ++i) groups[i] = std::uint32_t(i % 3);
+    for (const float budget : {0.0f, 0.3f}) {
+        SCOPED_TRACE(budget);
+        const SpatialSplitBvh ungrouped =
+            build_spatial_split_bvh(mesh, with_spatial_splits(budget));
+        std::size_t mixed_without = 0;
+        for (const auto& set : leaf_group_sets(ungrouped, groups))
+            mixed_without += std::any_of(set.begin(), set.end(),
+                                         [&](std::uint32_t g) { return g != set.front(); });
+        EXPECT_GT(mixed_without, 0u);  // the test means something
+        const SpatialSplitBvh grouped =
+            build_spatial_split_bvh(mesh, with_spatial_splits(budget), groups);
+        std::vector<std::uint32_t> reached(mesh.triangles.size(), 0);
+        for (const auto& set : leaf_group_sets(grouped, groups))
+            for (const std::uint32_t g : set) EXPECT_EQ(g, set.front());
+        for (const PrimId prim : grouped.leaf_prims) ++reached[prim];
+        EXPECT_EQ(std::count(reached.begin(), reached.end(), 0u), 0);
+        if (budget == 0.0f) {
+            EXPECT_EQ(grouped.leaf_prims.size(), mesh.triangles.size());
+        }
+    }
+}
+
 TEST(SpatialSplitBvh, SettingsOutOfRangeAreRejected) {
     EXPECT_THROW(with_spatial_splits(-0.1f).validate(), Error);
     EXPECT_THROW(with_spatial_splits(4.5f).validate(), Error);
@@ -242,7 +287,13 @@ TEST(SpatialSplitBvh, SettingsOutOfRangeAreRejected) {
     BuildSettings greedy = with_spatial_splits(0.3f);
     greedy.collapse = NodeCollapse::greedy;
     EXPECT_THROW(greedy.validate(), Error);
-    EXPECT_THROW(build_spatial_split_bvh(long_triangles(10, 1), BuildSettings{}), Error);
+    BuildSettings greedy_without_splits;
+    greedy_without_splits.collapse = NodeCollapse::greedy;
+    EXPECT_THROW(build_spatial_split_bvh(long_triangles(10, 1), greedy_without_splits), Error);
+    const std::vector<std::uint32_t> too_few_groups(9, 0u);
+    EXPECT_THROW(
+        build_spatial_split_bvh(long_triangles(10, 1), with_spatial_splits(0.3f), too_few_groups),
+        Error);
     EXPECT_NO_THROW(with_spatial_splits(0.0f).validate());
     EXPECT_NO_THROW(with_spatial_splits(4.0f).validate());
 }

@@ -84,6 +84,35 @@ INSTANTIATE_TEST_SUITE_P(SharedScenes, EmbreeAccelOnSharedScene,
                              return test::test_name_of(info.param);
                          });
 
+// A scene whose instances repeat little is traced through a world tree (world_tree.h) after a
+// full build, kept by a commit that changes nothing, and given up for the merged top level
+// once an instance moves; Embree's answers every time.
+TEST(EmbreeAccel, TracesAWorldTreeUntilInstancesMove) {
+    Device app;
+    const Scene scene =
+        load_gltf_scene(std::string(REBRAID_SHARED_SCENES) + "/motion_capture_rom.glb");
+    const auto embree_scene = feed_to_embree(app.device, scene);
+    EmbreeAccel accel(embree_scene->top);
+    EXPECT_TRUE(accel.accel().merged_top_level().is_world_tree);
+    expect_accel_matches_embree(embree_scene->top, accel, 21);
+
+    rtcCommitScene(embree_scene->top);
+    const EmbreeUpdateReport unchanged = accel.update();
+    EXPECT_FALSE(unchanged.is_full_rebuild);
+    EXPECT_EQ(unchanged.meshes_unchanged, accel.converted_scene().scene.meshes.size());
+    EXPECT_TRUE(accel.accel().merged_top_level().is_world_tree);
+
+    const RTCGeometry moved = rtcGetGeometry(embree_scene->top, 1);
+    const AffineTransform new_transform =
+        AffineTransform::translate({0.05f, 0.1f, 0.0f}) * scene.instances[1].object_to_world;
+    rtcSetGeometryTransform(moved, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, &new_transform);
+    rtcCommitGeometry(moved);
+    rtcCommitScene(embree_scene->top);
+    accel.update();
+    EXPECT_FALSE(accel.accel().merged_top_level().is_world_tree);
+    expect_accel_matches_embree(embree_scene->top, accel, 22);
+}
+
 /// Random triangles of widely varying size behind a random rotation, scale and translation:
 /// every hit rtcIntersect1 reports must be reproduced to the last bit by
 /// glue::embree_hit_attributes with Embree's world-to-object map and the arithmetic of the
