@@ -254,6 +254,8 @@ const std::vector<VariantKey>& variant_keys() {
         {"world-tree", named_choice(&Settings::world_tree,
                                     {{"1", true}, {"0", false}, {"true", true}, {"false", false}})},
         {"world-tree-budget", real_number(&Settings::world_tree_triangle_budget)},
+        {"world-tree-instances", whole_number(&Settings::world_tree_max_instances, 1u << 27)},
+        {"world-tree-triangles", whole_number(&Settings::world_tree_max_triangles, 1u << 31)},
         {"world-tree-splits", real_number(&Settings::world_tree_spatial_split_budget)},
         {"top-collapse",
          {[](const VariantValue& value, AccelOptions& options) {

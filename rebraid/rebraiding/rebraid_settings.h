@@ -213,11 +213,15 @@ struct RebraidSettings {
     /// Trace a world tree instead (TopLevelMergeSettings::world_tree; world_tree.h): one BVH
     /// over every instance's triangles, built in world space with spatial splits of
     /// `world_tree_spatial_split_budget`, whose leaves keep their instance's object space,
-    /// where the instanced triangles are at most `world_tree_triangle_budget` times the
-    /// meshes'. The top level is still built (statistics, updates); the world tree is what
-    /// queries traverse.
+    /// for scenes of at most `world_tree_max_instances` instances and
+    /// `world_tree_max_triangles` instanced triangles, those at most
+    /// `world_tree_triangle_budget` times the meshes'. The top level is still built
+    /// (statistics, updates); the world tree is what queries traverse. Off: the project's own
+    /// structures build meshes placed once in world space and merge them.
     bool world_tree = false;
     float world_tree_triangle_budget = 2.0f;
+    std::uint32_t world_tree_max_instances = 100;
+    std::uint32_t world_tree_max_triangles = 1000000;
     float world_tree_spatial_split_budget = kStaticSpatialSplitBudget;
     /// OpeningRule::overlap: a BRef is a candidate when the boxes of BRefs of other instances
     /// cover at least this fraction of its box (estimated on a grid over the segment).
@@ -242,7 +246,9 @@ struct RebraidSettings {
             .placed_node_budget = merge_placed_node_budget,
             .items_out_of_line_area_share = merge_items_out_of_line_area_share,
             .world_tree = world_tree,
-            .world_tree_triangle_budget = world_tree_triangle_budget};
+            .world_tree_triangle_budget = world_tree_triangle_budget,
+            .world_tree_max_instances = world_tree_max_instances,
+            .world_tree_max_triangles = world_tree_max_triangles};
         merge.world_tree_build.spatial_split_budget = world_tree_spatial_split_budget;
         return merge;
     }

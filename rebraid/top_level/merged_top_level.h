@@ -58,11 +58,17 @@ struct TopLevelMergeSettings {
     /// Instead of copying object subtrees, trace a world tree (world_tree.h): one BVH over every
     /// instance's triangles, built in world space with spatial splits that cut across
     /// instances, whose leaves each hold triangles of one instance, kept in object space and
-    /// tested as the placed items' leaves are. Built only for scenes of more than one
-    /// instance whose instanced triangles are at most `world_tree_triangle_budget` times
-    /// their meshes' triangles (the tree holds a copy of every instanced triangle).
+    /// tested as the placed items' leaves are. Built only for scenes of 2 to
+    /// `world_tree_max_instances` instances and at most `world_tree_max_triangles` instanced
+    /// triangles, those at most `world_tree_triangle_budget` times their meshes' triangles
+    /// (the tree holds a copy of every instanced triangle). It pays where few large instances
+    /// overlap; where rays cross many instances, each leaf's own ray costs more than the
+    /// better tree saves, and its build grows with every instanced triangle (docs/design.md,
+    /// "World trees").
     bool world_tree = false;
     float world_tree_triangle_budget = 2.0f;
+    std::uint32_t world_tree_max_instances = 100;
+    std::uint64_t world_tree_max_triangles = 1000000;
     /// The world tree's build: the object builder's settings, spatial splits included.
     BuildSettings world_tree_build = static_object_build_settings();
 };

@@ -60,9 +60,11 @@ FlattenedInstances flatten_instances(const Scene& scene) {
 }  // namespace
 
 bool wants_world_tree(const Scene& scene, const TopLevelMergeSettings& settings) {
-    if (!settings.world_tree || scene.instances.size() < 2) return false;
+    if (!settings.world_tree || scene.instances.size() < 2 ||
+        scene.instances.size() > settings.world_tree_max_instances)
+        return false;
     const std::uint64_t instanced = scene.instanced_triangle_count();
-    if (instanced == 0) return false;
+    if (instanced == 0 || instanced > settings.world_tree_max_triangles) return false;
     // The references the build may make must stay within what a leaf reference can name.
     const double references =
         double(instanced) * (1.0 + double(settings.world_tree_build.spatial_split_budget));

@@ -24,9 +24,9 @@ namespace rebraid {
 MergedTopLevel build_world_tree(const Scene& scene, std::span<const InstanceTarget> targets,
                                 const BuildSettings& settings);
 
-/// Whether TopLevelMergeSettings::world_tree asks for a world tree of `scene`: more than one
-/// instance, and instanced triangles at most `settings.world_tree_triangle_budget` times the
-/// meshes' triangles.
+/// Whether TopLevelMergeSettings::world_tree asks for a world tree of `scene`: 2 to
+/// world_tree_max_instances instances, at most world_tree_max_triangles instanced triangles,
+/// and those at most world_tree_triangle_budget times the meshes' triangles.
 bool wants_world_tree(const Scene& scene, const TopLevelMergeSettings& settings);
 
 }  // namespace rebraid

@@ -87,7 +87,7 @@ TEST(WorldTree, LeavesHoldTheTrianglesOfOneInstanceInItsObjectSpace) {
     EXPECT_TRUE(has_world_source);
 }
 
-TEST(WorldTree, BuiltForSeveralInstancesWithinItsTriangleBudget) {
+TEST(WorldTree, BuiltForScenesOfAFewInstancesThatRepeatLittle) {
     const Scene scene = crossing_scene();
     TopLevelMergeSettings merge;
     EXPECT_FALSE(wants_world_tree(scene, merge));  // off unless asked
@@ -97,6 +97,12 @@ TEST(WorldTree, BuiltForSeveralInstancesWithinItsTriangleBudget) {
     EXPECT_FALSE(wants_world_tree(scene, merge));
     merge.world_tree_triangle_budget = 10.0f;
     EXPECT_TRUE(wants_world_tree(scene, merge));
+    TopLevelMergeSettings few_instances = merge;
+    few_instances.world_tree_max_instances = std::uint32_t(scene.instances.size() - 1);
+    EXPECT_FALSE(wants_world_tree(scene, few_instances));
+    TopLevelMergeSettings few_triangles = merge;
+    few_triangles.world_tree_max_triangles = scene.instanced_triangle_count() - 1;
+    EXPECT_FALSE(wants_world_tree(scene, few_triangles));
     Scene single = scene;
     single.instances.resize(1);
     EXPECT_FALSE(wants_world_tree(single, merge));
