@@ -7,18 +7,17 @@
 
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <cstdint>
 #include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "rebraid/core/simd_level.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/rebraiding/rebraid_accel.h"
 #include "rebraid/rebraiding/rebraid_settings.h"
 #include "rebraid/top_level/instanced_accel.h"
+#include "support/entered_hits.h"
 #include "support/test_rays.h"
 #include "support/test_scenes.h"
 #include "support/thread_count_hash.h"
@@ -133,44 +132,9 @@ TEST_P(WorldTreeRays, FindWhatEnteringTheInstancesFinds) {
     InstancedAccel entered = built(scene, false);
     ASSERT_TRUE(world.merged_top_level().is_world_tree);
     ASSERT_TRUE(entered.merged_top_level().empty());
-    const std::vector<Ray> rays = test::varied_rays(entered, scene.bounds(), 10000, 5);
-    for (const TriangleTest test : {TriangleTest::moller, TriangleTest::watertight}) {
-        for (const SimdLevel level : runnable_simd_levels()) {
-            SCOPED_TRACE(std::string(simd_level_name(level)) + " / " +
-                         std::string(triangle_test_name(test)));
-            for (InstancedAccel* accel : {&world, &entered}) {
-                accel->set_simd_level(level);
-                accel->set_triangle_test(test);
-            }
-            std::size_t hits = 0, differing = 0, other_triangle = 0;
-            for (const Ray& ray : rays) {
-                // Each triangle is tested with the ray mapped as entering its instance maps
-                // it: the same t to the bit and the same occlusion. Two triangles hit at the
-                // same t may be found in another order: a tie either may win.
-                const LocatedHit a = world.intersect_located(ray);
-                const LocatedHit b = entered.intersect_located(ray);
-                hits += a.hit.is_hit();
-                const bool same = std::bit_cast<std::uint32_t>(a.hit.t) ==
-                                      std::bit_cast<std::uint32_t>(b.hit.t) &&
-                                  world.occluded(ray) == entered.occluded(ray);
-                if (!same && differing++ < 5) ADD_FAILURE() << "t " << a.hit.t << " / " << b.hit.t;
-                other_triangle +=
-                    a.hit.instance_id != b.hit.instance_id || a.hit.prim_id != b.hit.prim_id;
-                if (a.hit.is_hit() && a.hit.instance_id == b.hit.instance_id &&
-                    a.hit.prim_id == b.hit.prim_id) {
-                    EXPECT_EQ(std::bit_cast<std::uint32_t>(a.hit.u),
-                              std::bit_cast<std::uint32_t>(b.hit.u));
-                    EXPECT_EQ(a.triangle.has_moller_terms, b.triangle.has_moller_terms);
-                }
-                const Hit plain = world.intersect(ray);
-                EXPECT_EQ(plain.instance_id, a.hit.instance_id);
-                EXPECT_EQ(plain.prim_id, a.hit.prim_id);
-            }
-            EXPECT_LE(other_triangle, hits / 100);
-            EXPECT_EQ(differing, 0u);
-            EXPECT_GT(hits, rays.size() / 50);  // the comparison is not one of misses
-        }
-    }
+    // Each triangle is tested with the ray mapped as entering its instance maps it.
+    test::expect_hits_as_entering(world, entered,
+                                  test::varied_rays(entered, scene.bounds(), 10000, 5), false);
 }
 
 TEST_P(WorldTreeRays, SameTreeOnAnyThreadCount) {
