@@ -72,15 +72,15 @@ namespace {
 
 /// Cost of the object subtree at `ref` given the half area of the region whose hit makes the
 /// ray visit it (`entry_area`).
-double object_subtree_cost_from(const ObjectBvh& bvh, NodeRef ref, double entry_area,
+double object_subtree_cost_from(const WideNode* nodes, NodeRef ref, double entry_area,
                                 const AffineTransform& object_to_world) {
     if (ref.is_empty()) return 0.0;
     if (ref.is_leaf()) return entry_area * ref.prim_count();
-    const WideNode& node = bvh.nodes[ref.node_id()];
+    const WideNode& node = nodes[ref.node_id()];
     double cost = entry_area;
     for (int i = 0; i < kBvhWidth && !node.children[i].is_empty(); ++i)
         cost += object_subtree_cost_from(
-            bvh, node.children[i], mapped_box_half_area(node.child_bounds(i), object_to_world),
+            nodes, node.children[i], mapped_box_half_area(node.child_bounds(i), object_to_world),
             object_to_world);
     return cost;
 }
@@ -89,7 +89,12 @@ double object_subtree_cost_from(const ObjectBvh& bvh, NodeRef ref, double entry_
 
 double object_subtree_cost(const ObjectBvh& bvh, NodeRef ref, const BBox3f& world_box,
                            const AffineTransform& object_to_world) {
-    return object_subtree_cost_from(bvh, ref, world_box.half_area(), object_to_world);
+    return object_subtree_cost_from(bvh.nodes.data(), ref, world_box.half_area(), object_to_world);
+}
+
+double world_tree_cost(std::span<const WideNode> nodes, NodeRef root, const BBox3f& root_box) {
+    return object_subtree_cost_from(nodes.data(), root, root_box.half_area(),
+                                    AffineTransform::identity());
 }
 
 double object_bvh_sah(const ObjectBvh& bvh) {

@@ -33,6 +33,10 @@ double mapped_box_half_area(const BBox3f& box, const AffineTransform& object_to_
 double object_subtree_cost(const ObjectBvh& bvh, NodeRef ref, const BBox3f& world_box,
                            const AffineTransform& object_to_world);
 
+/// Unnormalised SAH cost of a world-space tree over `nodes` from `root`, entered when a ray
+/// hits `root_box`, leaves weighted by their triangle count: a world tree's (world_tree.h).
+double world_tree_cost(std::span<const WideNode> nodes, NodeRef root, const BBox3f& root_box);
+
 /// SAH of a flat (world-space) BVH: object_subtree_cost of its root over its root area.
 double object_bvh_sah(const ObjectBvh& bvh);
 

@@ -245,6 +245,18 @@ AccelStats InstancedAccel::stats() const {
               object_views_.size() * sizeof(ObjectBvhView) + merged_.memory_bytes();
     stats.nodes = nodes;
     stats.leaves = leaves;
+    if (merged_.is_world_tree) {
+        // What the queries traverse is the world tree: its cost over the same scene area as
+        // every structure's, and its nodes and leaves.
+        const double scene_area =
+            instanced_scene_half_area(top_, object_bvhs_, instance_mesh_, object_to_world_);
+        const double cost =
+            world_tree_cost(merged_.nodes, merged_.root, merged_.world_tree_leaves.bounds);
+        stats.sah = scene_area > 0.0 ? cost / scene_area : 0.0;
+        const TreeCounts counts = count_tree(merged_.nodes, merged_.root);
+        stats.nodes = counts.inner_nodes;
+        stats.leaves = counts.leaves;
+    }
     stats.memory_bytes = memory;
     stats.structure_hash = hash.value();
     stats.kernels = std::string(simd_level_name(simd_level_));

@@ -78,6 +78,8 @@ TEST(WorldTree, LeavesHoldTheTrianglesOfOneInstanceInItsObjectSpace) {
             }
         }
     EXPECT_GT(leaf_count, scene.instances.size());
+    // The statistics describe the tree the queries traverse.
+    EXPECT_EQ(accel.stats().leaves, leaf_count);
     EXPECT_EQ(reached.size(), scene.instanced_triangle_count());
     // The instance placed by the identity is tested in world space.
     bool has_world_source = false;
