@@ -215,9 +215,10 @@ struct RebraidSettings {
     /// `world_tree_spatial_split_budget`, whose leaves keep their instance's object space,
     /// for scenes of at most `world_tree_max_instances` instances and
     /// `world_tree_max_triangles` instanced triangles, those at most
-    /// `world_tree_triangle_budget` times the meshes'. The top level is still built
-    /// (statistics, updates); the world tree is what queries traverse. Off: the project's own
-    /// structures build meshes placed once in world space and merge them.
+    /// `world_tree_triangle_budget` times the meshes'. The top level and the object BVHs are
+    /// still built (the structure's hash, updates); the world tree is what queries traverse.
+    /// Off: the project's own structures build meshes placed once in world space and merge
+    /// them.
     bool world_tree = false;
     float world_tree_triangle_budget = 2.0f;
     std::uint32_t world_tree_max_instances = 100;
