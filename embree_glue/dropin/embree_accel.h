@@ -40,10 +40,11 @@ struct EmbreeAccelSettings {
     /// placed instances are merged into the traced tree (merge_placed_instances: world-space
     /// boxes, object-space triangles, the same bits) while their copies hold at most 4 times
     /// the object BVHs' nodes: Embree's viewer under the preload traced brainstem, fzk_haus
-    /// and two_cylinder_engine 2-5 % faster, at 0.4-1.1 MB more (docs/design.md). Where the
-    /// instanced triangles are at most twice the meshes', a full build traces a world tree
-    /// instead (world_tree: rebraid/top_level/world_tree.h; docs/embree.md), and update()
-    /// after instances or vertices moved the merged top level.
+    /// and two_cylinder_engine 2-5 % faster, at 0.4-1.1 MB more (docs/design.md). For 2 to
+    /// 100 instances and at most a million instanced triangles, at most twice the meshes', a
+    /// full build traces a world tree instead (world_tree: rebraid/top_level/world_tree.h;
+    /// docs/design.md, "World trees"), and update() after instances or vertices moved the
+    /// merged top level.
     RebraidSettings rebraid = [] {
         RebraidSettings settings;
         settings.world_space_single_instances = false;
