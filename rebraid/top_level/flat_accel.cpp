@@ -9,43 +9,11 @@
 #include "rebraid/core/huge_pages.h"
 #include "rebraid/core/structure_hash.h"
 #include "rebraid/top_level/bvh_stats.h"
+#include "rebraid/top_level/flattened_instances.h"
 #include "rebraid/top_level/trace_kernels.h"
 
 namespace rebraid {
 namespace {
-
-/// Every instance's triangles as one world-space mesh (triangles in instance order).
-Mesh make_world_mesh(const Scene& scene, std::vector<InstanceId>& triangle_instance,
-                     std::vector<PrimId>& triangle_prim) {
-    std::vector<std::uint64_t> vertex_offset(scene.instances.size() + 1, 0);
-    std::vector<std::uint64_t> triangle_offset(scene.instances.size() + 1, 0);
-    for (std::size_t i = 0; i < scene.instances.size(); ++i) {
-        const Mesh& mesh = scene.meshes[scene.instances[i].mesh_id];
-        vertex_offset[i + 1] = vertex_offset[i] + mesh.positions.size();
-        triangle_offset[i + 1] = triangle_offset[i] + mesh.triangles.size();
-    }
-    Mesh world;
-    world.name = "world";
-    world.positions.resize(vertex_offset.back());
-    world.triangles.resize(triangle_offset.back());
-    triangle_instance.resize(triangle_offset.back());
-    triangle_prim.resize(triangle_offset.back());
-    tbb::parallel_for(std::size_t(0), scene.instances.size(), [&](std::size_t i) {
-        const Instance& instance = scene.instances[i];
-        const Mesh& mesh = scene.meshes[instance.mesh_id];
-        const auto base = std::uint32_t(vertex_offset[i]);
-        for (std::size_t v = 0; v < mesh.positions.size(); ++v)
-            world.positions[base + v] = instance.object_to_world.transform_point(mesh.positions[v]);
-        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-            const std::size_t out = triangle_offset[i] + t;
-            const Triangle& tri = mesh.triangles[t];
-            world.triangles[out] = {base + tri[0], base + tri[1], base + tri[2]};
-            triangle_instance[out] = InstanceId(i);
-            triangle_prim[out] = PrimId(t);
-        }
-    });
-    return world;
-}
 
 /// Renumbers the world triangles in the BVH's leaf order (bvh.prim_ids becomes the identity):
 /// a hit's leaf position then names its instance and primID with one lookup instead of two
@@ -75,8 +43,10 @@ FlatAccel::FlatAccel(const Scene& scene, const BuildSettings& settings)
     : simd_level_(default_simd_level()), kernels_(&trace_kernels(simd_level_, triangle_test_)) {
     scene.validate();
     const BuildTimer timer;
-    const Mesh world = make_world_mesh(scene, triangle_instance_, triangle_prim_);
-    bvh_ = build_object_bvh(world, settings);
+    FlattenedInstances flat = flatten_instances(scene, false);
+    triangle_instance_ = std::move(flat.instance);
+    triangle_prim_ = std::move(flat.prim);
+    bvh_ = build_object_bvh(flat.world, settings);
     renumber_in_leaf_order(bvh_, triangle_instance_, triangle_prim_);
     write_hit_ids(scene);
     root_box_ = root_box_of(bvh_.nodes, bvh_.root);
