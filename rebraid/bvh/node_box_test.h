@@ -1,6 +1,5 @@
 #pragma once
 
-#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -13,12 +12,8 @@ namespace rebraid {
 inline namespace REBRAID_SIMD_NAMESPACE {
 
 // The box-test kernels of traverse_bvh. Each comes in the SIMD level the library is compiled
-// for (simd_config.h) and a portable form: the same hits (at the robust bound's margin their
-// rounding may differ by an ulp); the traversal loop itself never names an ISA.
-
-/// The far distance of a slab test is scaled up by 1 + 2*gamma(3) (Ize 2013) so rounding can
-/// never reject a box the ray touches.
-inline constexpr float kRobustBoxScale = 1.0f + 4.0f * 5.96046448e-08f;
+// for (simd_config.h) and a portable form: the same arithmetic, and both conservative
+// (SlabShifts), so the same hits; the traversal loop itself never names an ISA.
 
 #ifdef REBRAID_SIMD_AVX2
 
@@ -29,59 +24,51 @@ public:
     explicit NodeBoxTest(const TraversalRay& ray)
         : tnear_(_mm256_set1_ps(ray.tnear)), planes_(&ray.plane_offsets()) {
         for (int a = 0; a < 3; ++a) {
-            org_[a] = _mm256_set1_ps(ray.org[a]);
-            negated_rdir_[a] = _mm256_set1_ps(-ray.rdir[a]);
-            // The robust scale on the far planes' multiplier, one ulp further from zero (rdir is
-            // finite and not zero): no multiply after the min, on the path every node waits on.
-            const float scaled = -ray.rdir[a] * kRobustBoxScale;
-            far_negated_rdir_[a] =
-                _mm256_set1_ps(std::bit_cast<float>(std::bit_cast<std::uint32_t>(scaled) + 1u));
+            rdir_[a] = _mm256_set1_ps(ray.rdir[a]);
+            near_shift_[a] = _mm256_set1_ps(ray.shifts.near[a]);
+            far_shift_[a] = _mm256_set1_ps(ray.shifts.far[a]);
         }
     }
 
     /// Mask of the children the ray enters within [tnear, tfar] (tnear the prepared ray's,
-    /// which no query changes: broadcast once here rather than per node), with every child's entry
-    /// distance in `distances` (32-byte aligned). Every step is chosen for the latency of the
-    /// chain each node waits on (in-process A/B on the shared scenes: 1-4 % more rays per
-    /// second than the plain form):
-    /// - the distance to a plane is (plane - org) * rdir, not a fused multiply-add (the product
-    ///   of a far-away origin and rdir would cost the precision the robust bound relies on),
-    ///   taken as (org - plane) * -rdir, which reads the plane straight into the subtraction:
-    ///   the same number but for the sign of a zero (a plane at the origin's coordinate);
-    /// - the robust scale is in the far planes' multiplier and in tfar, not a multiply after
-    ///   the min;
+    /// which no query changes: broadcast once here rather than per node), with every child's
+    /// entry distance in `distances` (32-byte aligned). Every step is chosen for the latency
+    /// of the chain each node waits on:
+    /// - the distance to a plane is one fused multiply-add, plane * rdir + shift, with the
+    ///   plane read straight into it and the shifts (SlabShifts) keeping it conservative
+    ///   without a scale on tfar or a multiply after the min;
     /// - max and min are integer operations on the float bits: the same as the float ones on
     ///   the non-negative distances that decide (with tnear >= 0 the entry never shows a zero's
     ///   sign), and on negative ones they err towards entering (a smaller entry, a larger
     ///   exit), never towards rejecting a box the ray touches.
     unsigned operator()(const WideNode& node, float tfar, float* distances) const {
         const char* base = reinterpret_cast<const char*>(&node);
-        const auto slab = [&](std::uint32_t offset, const __m256& multiplier, int axis) {
+        const auto slab = [&](std::uint32_t offset, int axis, const __m256& shift) {
             const __m256 plane = _mm256_load_ps(reinterpret_cast<const float*>(base + offset));
-            return _mm256_mul_ps(_mm256_sub_ps(org_[axis], plane), multiplier);
+            return _mm256_fmadd_ps(plane, rdir_[axis], shift);
         };
-        const __m256 near_x = slab(planes_->near[0], negated_rdir_[0], 0);
-        const __m256 near_y = slab(planes_->near[1], negated_rdir_[1], 1);
-        const __m256 near_z = slab(planes_->near[2], negated_rdir_[2], 2);
-        const __m256 far_x = slab(planes_->far[0], far_negated_rdir_[0], 0);
-        const __m256 far_y = slab(planes_->far[1], far_negated_rdir_[1], 1);
-        const __m256 far_z = slab(planes_->far[2], far_negated_rdir_[2], 2);
+        const __m256 near_x = slab(planes_->near[0], 0, near_shift_[0]);
+        const __m256 near_y = slab(planes_->near[1], 1, near_shift_[1]);
+        const __m256 near_z = slab(planes_->near[2], 2, near_shift_[2]);
+        const __m256 far_x = slab(planes_->far[0], 0, far_shift_[0]);
+        const __m256 far_y = slab(planes_->far[1], 1, far_shift_[1]);
+        const __m256 far_z = slab(planes_->far[2], 2, far_shift_[2]);
         const auto bits = [](__m256 v) { return _mm256_castps_si256(v); };
         const __m256 entry =
             _mm256_castsi256_ps(_mm256_max_epi32(_mm256_max_epi32(bits(near_x), bits(near_y)),
                                                  _mm256_max_epi32(bits(near_z), bits(tnear_))));
-        const __m256 robust_exit = _mm256_castsi256_ps(_mm256_min_epi32(
-            _mm256_min_epi32(bits(far_x), bits(far_y)),
-            _mm256_min_epi32(bits(far_z), bits(_mm256_set1_ps(tfar * kRobustBoxScale)))));
+        const __m256 exit = _mm256_castsi256_ps(
+            _mm256_min_epi32(_mm256_min_epi32(bits(far_x), bits(far_y)),
+                             _mm256_min_epi32(bits(far_z), bits(_mm256_set1_ps(tfar)))));
         _mm256_store_ps(distances, entry);
-        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(entry, robust_exit, _CMP_LE_OQ)));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(entry, exit, _CMP_LE_OQ)));
     }
 
 private:
     __m256 tnear_;
-    __m256 org_[3];
-    __m256 negated_rdir_[3];
-    __m256 far_negated_rdir_[3];
+    __m256 rdir_[3];
+    __m256 near_shift_[3];
+    __m256 far_shift_[3];
     const SlabPlaneOffsets* planes_;
 };
 
@@ -115,12 +102,13 @@ public:
         for (int i = 0; i < kBvhWidth; ++i) {
             float t_enter = ray_.tnear, t_exit = tfar;
             for (int a = 0; a < 3; ++a) {
-                t_enter =
-                    std::fmax(t_enter, (plane(planes_.near[a], i) - ray_.org[a]) * ray_.rdir[a]);
-                t_exit = std::fmin(t_exit, (plane(planes_.far[a], i) - ray_.org[a]) * ray_.rdir[a]);
+                t_enter = std::fmax(t_enter, std::fma(plane(planes_.near[a], i), ray_.rdir[a],
+                                                      ray_.shifts.near[a]));
+                t_exit = std::fmin(
+                    t_exit, std::fma(plane(planes_.far[a], i), ray_.rdir[a], ray_.shifts.far[a]));
             }
             distances[i] = t_enter;
-            if (t_enter <= t_exit * kRobustBoxScale) mask |= 1u << i;
+            if (t_enter <= t_exit) mask |= 1u << i;
         }
         return mask;
     }

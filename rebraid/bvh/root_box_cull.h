@@ -3,7 +3,6 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "rebraid/bvh/node_box_test.h"
 #include "rebraid/bvh/root_box.h"
 #include "rebraid/bvh/traversal_ray.h"
 #include "rebraid/core/ray.h"
@@ -16,11 +15,11 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 /// before the query prepares its ray: the preparation (broadcast origin, multipliers and
 /// triangle-test vectors, a frame of locals) costs a ray that misses the scene more than the
 /// root's box test itself, and on the primary rays of a scene small in its frame most rays
-/// do. The slab test of NodeBoxTest (the same reciprocals and robust multipliers) on the union
+/// do. The slab test of NodeBoxTest (the same reciprocals and shifts, SlabShifts) on the union
 /// of the root's child boxes, with float max and min: its entry is never later and its exit
-/// never earlier than a child's, so every ray that meets a child within its interval (the
-/// robust test's promise) passes. (NodeBoxTest's integer max and min let in a few rays more
-/// that meet no box, a -0 distance counting as the least: rays outside it that move away.)
+/// never earlier than a child's, so every ray the node test lets into a child passes.
+/// (NodeBoxTest's integer max and min let in a few rays more that meet no box, a -0 distance
+/// counting as the least: rays outside it that move away.)
 /// A NaN in the ray answers a miss, as the traversal does. The portable kernels reject
 /// nothing here.
 /// `reciprocals` are those of ray.dir.
@@ -41,15 +40,13 @@ inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]
     const __m128 is_negative = _mm_cmp_ps(reciprocal, _mm_setzero_ps(), _CMP_NGE_UQ);
     const __m128 near_plane = _mm_blendv_ps(lower, upper, is_negative);
     const __m128 far_plane = _mm_blendv_ps(upper, lower, is_negative);
-    const __m128 negated = _mm_xor_ps(reciprocal, _mm_set1_ps(-0.0f));
-    // As NodeBoxTest's far multiplier: the robust scale, then one ulp further from zero.
-    const __m128 far_negated = _mm_castsi128_ps(_mm_add_epi32(
-        _mm_castps_si128(_mm_mul_ps(negated, _mm_set1_ps(kRobustBoxScale))), _mm_set1_epi32(1)));
+    // As TraversalRay forms them for the node test: the same floats in lanes 0-2.
+    __m128 near_shift, far_shift;
+    slab_shift_lanes(org, reciprocal, near_shift, far_shift);
     // Lane 3 takes the ray's own interval, as the node test's fourth operand of max and min.
     const __m128 dir = _mm_loadu_ps(&ray.dir.x);  // lane 3: tfar
-    const __m128 near = _mm_blend_ps(_mm_mul_ps(_mm_sub_ps(org, near_plane), negated), org, 8);
-    const __m128 far = _mm_blend_ps(_mm_mul_ps(_mm_sub_ps(org, far_plane), far_negated),
-                                    _mm_mul_ps(dir, _mm_set1_ps(kRobustBoxScale)), 8);
+    const __m128 near = _mm_blend_ps(_mm_fmadd_ps(near_plane, reciprocal, near_shift), org, 8);
+    const __m128 far = _mm_blend_ps(_mm_fmadd_ps(far_plane, reciprocal, far_shift), dir, 8);
     const __m128 near_2 = _mm_max_ps(near, _mm_permute_ps(near, 0x4e));
     const __m128 far_2 = _mm_min_ps(far, _mm_permute_ps(far, 0x4e));
     const __m128 entry = _mm_max_ps(near_2, _mm_permute_ps(near_2, 0xb1));

@@ -65,6 +65,50 @@ inline __m128 reciprocal_directions(Vec3f direction) {
 }
 #endif
 
+/// How far a slab test moves the product org * rdir, for each unit of its size, so that the
+/// fused form plane * rdir - org * rdir never rejects a box the ray touches: 4 units in the
+/// last place of the product cover its rounding and that of the sums the shifts are formed
+/// by (slab_shifts), with room to spare.
+inline constexpr float kSlabShiftScale = 4.0f * 5.96046448e-08f;
+
+/// The shifts of the fused slab test (Embree's form, made conservative): a plane's distance
+/// along an axis is taken as fma(plane, rdir, shift), with `near` (-(org * rdir) - margin) for
+/// the planes a ray enters boxes through and `far` (-(org * rdir) + margin) for those it
+/// leaves them through. The margin bounds the rounding of org * rdir (kSlabShiftScale of its
+/// size, at least the smallest normal float), so the exact value of each fused result lies on
+/// the safe side of the exact distance (plane - org) * rdir, and rounding, being monotonic,
+/// keeps every computed entry at most and every exit at least the rounded exact one: a box
+/// the ray meets within [tnear, tfar] is never rejected, with no scale on tfar. (The product
+/// of a far-away origin and rdir loses the small distances' precision; the margin, a few
+/// units in the last place of the origin's coordinate, makes up for it.) An infinite product
+/// gives infinite shifts of its sign, as the exact distances are.
+struct SlabShifts {
+    Vec3f near;
+    Vec3f far;
+};
+
+/// SlabShifts of one axis (every kernel level forms them in this order: the same floats).
+inline void slab_shifts(float org, float rdir, float& near_shift, float& far_shift) {
+    const float product = org * rdir;
+    const float margin = std::fmin(std::fmax(std::fabs(product) * kSlabShiftScale, 1.17549435e-38f),
+                                   3.40282347e+38f);
+    near_shift = -(product + margin);
+    far_shift = margin - product;
+}
+
+#ifdef REBRAID_SIMD_AVX2
+/// slab_shifts for the axes in the lanes of `org` and `reciprocal`, in those lanes.
+inline void slab_shift_lanes(__m128 org, __m128 reciprocal, __m128& near_shift, __m128& far_shift) {
+    const __m128 product = _mm_mul_ps(org, reciprocal);
+    const __m128 size = _mm_andnot_ps(_mm_set1_ps(-0.0f), product);
+    const __m128 margin = _mm_min_ps(
+        _mm_max_ps(_mm_mul_ps(size, _mm_set1_ps(kSlabShiftScale)), _mm_set1_ps(1.17549435e-38f)),
+        _mm_set1_ps(3.40282347e+38f));
+    near_shift = _mm_xor_ps(_mm_add_ps(product, margin), _mm_set1_ps(-0.0f));
+    far_shift = _mm_sub_ps(margin, product);
+}
+#endif
+
 /// The reciprocals of a ray's direction as the box tests take them (reciprocal_directions), made
 /// once per query: the root-box cull (misses_root_box) and the prepared world ray both read them,
 /// where each used to divide on its own (one division on the path of every ray from outside the
@@ -90,6 +134,8 @@ struct TraversalRay {
     /// Bit a set when the ray runs towards lower coordinates along axis a (rdir[a] is not
     /// >= 0, so a NaN counts as negative).
     std::uint32_t negative_axes = 0;
+    /// The box tests' shifts (SlabShifts) for org and rdir.
+    SlabShifts shifts;
 
     TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far)
         : TraversalRay(origin, direction, t_near, t_far, DirectionReciprocals(direction)) {}
@@ -109,12 +155,21 @@ struct TraversalRay {
         negative_axes =
             std::uint32_t(_mm_movemask_ps(_mm_cmp_ps(reciprocal, _mm_setzero_ps(), _CMP_NGE_UQ))) &
             7u;
+        __m128 near_shift, far_shift;
+        slab_shift_lanes(_mm_setr_ps(origin.x, origin.y, origin.z, 0.0f), reciprocal, near_shift,
+                         far_shift);
+        alignas(16) float near_lanes[4], far_lanes[4];
+        _mm_store_ps(near_lanes, near_shift);
+        _mm_store_ps(far_lanes, far_shift);
+        shifts = {{near_lanes[0], near_lanes[1], near_lanes[2]},
+                  {far_lanes[0], far_lanes[1], far_lanes[2]}};
 #else
         for (int a = 0; a < 3; ++a) {
             const float d = direction[a];
             const float safe = std::fabs(d) < 1e-18f ? std::copysign(1e-18f, d) : d;
             rdir[a] = 1.0f / safe;
             if (!(rdir[a] >= 0.0f)) negative_axes |= 1u << a;
+            slab_shifts(origin[a], rdir[a], shifts.near[a], shifts.far[a]);
         }
 #endif
     }

@@ -161,12 +161,17 @@ Rgb8Image read_rgb8(const fs::path& path) {
     return image;
 }
 
-/// "twolevel: ... (3.93 nodes, ..." -> 3.93: nodes per ray of `accel` in render's summary.
+/// "twolevel: 461120 nodes visited, ... by 129600 primary rays" -> 3.558: nodes per ray of
+/// `accel` in render's summary.
 double nodes_per_ray(const std::string& summary, const std::string& accel) {
+    // From the exact counts ("N nodes visited, ... by R primary rays"), not the rounded
+    // figure in parentheses, which would be rounded twice.
     const std::size_t line = summary.find("  " + accel + ": ");
-    const std::size_t open = summary.find('(', line);
-    if (line == std::string::npos || open == std::string::npos) return -1.0;
-    return std::stod(summary.substr(open + 1));
+    if (line == std::string::npos) return -1.0;
+    const std::size_t by = summary.find(" by ", line);
+    if (by == std::string::npos) return -1.0;
+    const double nodes = std::stod(summary.substr(line + accel.size() + 4));
+    return nodes / std::stod(summary.substr(by + 4));
 }
 
 // The heatmap picture is exact apart from its Mrays/s labels, so it must be what the build
