@@ -139,6 +139,8 @@ EmbreeAccel::EmbreeAccel(RTCScene scene, const EmbreeAccelSettings& settings)
         build_rebraid_accel(converted_.scene, object_builder_, settings_.rebraid));
     accel_->set_triangle_test(triangle_test_for(converted_));
     accel_->set_world_to_object(embree_world_to_object_);
+    // Every query is screened first (turns_away): the root box's test would repeat it.
+    accel_->set_culls_root_box(false);
     intersect1_ = intersect1_form();
     bounds_ = converted_.scene.bounds();
     pad_bounds();
@@ -458,6 +460,7 @@ EmbreeUpdateReport EmbreeAccel::update() {
     next_accel->set_triangle_test(triangle_test_for(next));
     std::vector<AffineTransform> world_to_object = embree_world_to_object_maps(next.scene);
     next_accel->set_world_to_object(world_to_object);
+    next_accel->set_culls_root_box(false);
     bounds_ = next.scene.bounds();
     converted_ = std::move(next);
     accel_ = std::move(next_accel);

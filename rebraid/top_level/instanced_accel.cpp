@@ -127,10 +127,8 @@ InstancedAccel::InstancedAccel(const Scene& scene, std::vector<ObjectBvh> object
         merged_ = merge_top_level_items(top_, instance_targets_, object_views_, object_to_world_,
                                         object_nodes, merge);
     }
-    // (A top level of one item has no root node of its own: refresh_sole_item() sets the box.)
-    root_box_ = merged_.empty() ? root_box_of(top_.nodes, top_.root)
-                                : root_box_of(merged_.nodes, merged_.root);
     use_kernels(simd_level_, triangle_test_);
+    refresh_root_box();
     const double records_ms = timer.elapsed_ms();
     build_info_.build_ms += records_ms;
     build_info_.top_build_ms = build_info_.top_build_ms.value_or(0.0) + records_ms;
@@ -187,10 +185,27 @@ void InstancedAccel::refresh_sole_item() {
     sole_item_.bvh = object_views_[target.mesh];
     sole_item_.node = item.object_node;
     sole_item_.instance = item.instance_id;
-    // The item's node is in world space only where its instance is placed by the identity.
-    root_box_ = target.space == InstanceTarget::kWorldSpace
-                    ? root_box_of(object_bvhs_[target.mesh].nodes, item.object_node)
-                    : RootBox{};
+}
+
+void InstancedAccel::refresh_root_box() {
+    if (!culls_root_box_) {
+        root_box_ = RootBox{};  // all of space: no ray starts outside it
+    } else if (has_sole_item()) {
+        // No root node of its own: the item's node is the root, in world space only where
+        // its instance is placed by the identity.
+        const SoleItem& item = sole_item_;
+        root_box_ = item.target.space == InstanceTarget::kWorldSpace
+                        ? root_box_of(object_bvhs_[item.target.mesh].nodes, item.node)
+                        : RootBox{};
+    } else {
+        root_box_ = merged_.empty() ? root_box_of(top_.nodes, top_.root)
+                                    : root_box_of(merged_.nodes, merged_.root);
+    }
+}
+
+void InstancedAccel::set_culls_root_box(bool culls) {
+    culls_root_box_ = culls;
+    refresh_root_box();
 }
 
 void InstancedAccel::set_simd_level(SimdLevel level) {
@@ -209,6 +224,7 @@ void InstancedAccel::set_world_to_object(std::span<const AffineTransform> world_
         if (instance_targets_[i].space != InstanceTarget::kWorldSpace)
             instance_targets_[i].to_object = world_to_object[i];
     refresh_sole_item();
+    refresh_root_box();
 }
 
 void InstancedAccel::set_triangle_test(TriangleTest test) {

@@ -79,8 +79,16 @@ public:
     const MergedTopLevel& merged_top_level() const { return merged_; }
     /// The box around the root children of the tree queries traverse (the merged top level,
     /// the top level, or a sole item's object BVH where its instance is placed by the
-    /// identity), which they test first (root_box_cull.h).
+    /// identity), which they test first (root_box_cull.h); all of space where they do not
+    /// (set_culls_root_box).
     const RootBox& root_box() const { return root_box_; }
+    /// Whether queries test the root box first: on at construction. A caller that screens
+    /// every ray against the scene's box itself before it queries (the Embree glue) turns it
+    /// off: the box is then all of space, and a query checks that the origin lies in it
+    /// instead of testing the ray's slabs against the box a second time. The same hits
+    /// either way. Not while tracing.
+    void set_culls_root_box(bool culls);
+    bool culls_root_box() const { return culls_root_box_; }
 
     /// Replaces the world-to-object map of every instance not placed by the identity with
     /// `world_to_object[i]` (index = InstanceId; each an inverse of the instance's
@@ -121,6 +129,7 @@ private:
     decltype(TraceKernels::instanced_intersect_located) intersect_located_ = nullptr;
     SoleItem sole_item_;
     RootBox root_box_;
+    bool culls_root_box_ = true;
 
     void use_kernels(SimdLevel level, TriangleTest test);
     /// Whether the top level holds one item (its root a leaf of one item).
@@ -128,6 +137,9 @@ private:
     /// Copies the top level's one item, its instance's target and its mesh's arrays into
     /// sole_item_ (when the top level holds one item).
     void refresh_sole_item();
+    /// Sets root_box_ for the tree queries traverse, or to all of space where they do not
+    /// cull (culls_root_box_).
+    void refresh_root_box();
 };
 
 /// Object BVHs from `object_builder`, then the plain two-level top (two_level_builder.h).

@@ -266,6 +266,42 @@ TEST(InstancedAccel, TopLevelOfOneItemAnswersAsTheGeneralTraversal) {
     }
 }
 
+// Without the root box's test (set_culls_root_box(false), as the Embree glue runs, which
+// screens rays itself) every query answers bit for bit as with it: for the two-level and the
+// re-braided structures of every test scene (merged, world-tree and plain top levels among
+// them), and for a top level of one item, at every kernel level.
+TEST(InstancedAccel, AnswersAlikeWithAndWithoutTheRootBoxCull) {
+    for_each_instanced_accel_and_level(11, [](InstancedAccel& accel, const std::vector<Ray>& rays) {
+        ASSERT_TRUE(accel.culls_root_box());
+        const RootBox culled = accel.root_box();
+        const ExactAnswers with_cull(accel, rays);
+        accel.set_culls_root_box(false);
+        EXPECT_EQ(accel.root_box().lower[0], -RootBox::kInfinity);  // all of space
+        EXPECT_EQ(accel.root_box().upper[2], RootBox::kInfinity);
+        const bool same = ExactAnswers(accel, rays).bits == with_cull.bits;
+        accel.set_culls_root_box(true);
+        EXPECT_TRUE(same);
+        for (int a = 0; a < 3; ++a) {  // and turned on again, the box is back
+            EXPECT_EQ(accel.root_box().lower[a], culled.lower[a]);
+            EXPECT_EQ(accel.root_box().upper[a], culled.upper[a]);
+        }
+    });
+    Scene alone;
+    alone.meshes.push_back(make_torus_knot());
+    alone.instances.push_back({0, AffineTransform::identity()});
+    InstancedAccel sole = build_two_level_accel(alone);
+    ASSERT_TRUE(sole.top_level().root.is_leaf());
+    ASSERT_GT(sole.root_box().upper[0], sole.root_box().lower[0]);  // a box: it does cull
+    ASSERT_LT(sole.root_box().upper[0], RootBox::kInfinity);
+    const std::vector<Ray> rays = test::varied_rays(sole, alone.bounds(), 4000, 5);
+    const ExactAnswers with_cull(sole, rays);
+    sole.set_culls_root_box(false);
+    EXPECT_TRUE(ExactAnswers(sole, rays).bits == with_cull.bits);
+    // The setting holds through what refreshes the sole item.
+    sole.set_world_to_object(std::vector<AffineTransform>(1, AffineTransform::identity()));
+    EXPECT_EQ(sole.root_box().upper[0], RootBox::kInfinity);
+}
+
 TEST(TwoLevelAccel, ManyInstancesPlacedAlikeShareTheSpaceOfTheFirst) {
     // 20,000 instances cycling through 7 placements (the identity among them): the records
     // are made in parallel, and each run of equal transforms spans many of its ranges.
