@@ -19,9 +19,9 @@ namespace rebraid {
 namespace {
 
 /// The ray's interval through `box` within [tnear, tfar], with the distances
-/// (plane - org) * rdir for the ray's own reciprocals taken in long double: exact but for a
-/// rounding far below a float's (a float difference and a product of two floats need at most
-/// 48 bits, long double keeps 64). The box is met where entry <= exit.
+/// (plane - org) * rdir for the ray's own reciprocals taken in long double: the difference of
+/// these floats is exact there, its product with rdir rounded at 2^-64 of its size, far below
+/// a float's 2^-24. The box is met where entry <= exit.
 struct ExactInterval {
     long double entry, exit;
 };
