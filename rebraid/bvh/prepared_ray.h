@@ -21,10 +21,9 @@ struct PreparedRay {
 
     PreparedRay(Vec3f origin, Vec3f direction, float tnear, float tfar)
         : ray(origin, direction, tnear, tfar), box_test(ray), triangle_ray(origin, direction) {}
-    /// With the reciprocals of `direction` already made.
-    PreparedRay(Vec3f origin, Vec3f direction, float tnear, float tfar,
-                const DirectionReciprocals& reciprocals)
-        : ray(origin, direction, tnear, tfar, reciprocals),
+    /// With the slab terms of `origin` and `direction` already made.
+    PreparedRay(Vec3f origin, Vec3f direction, float tnear, float tfar, const SlabTerms& slab_terms)
+        : ray(origin, direction, tnear, tfar, slab_terms),
           box_test(ray),
           triangle_ray(origin, direction) {}
     PreparedRay(const PreparedRay&) = delete;

@@ -22,9 +22,9 @@ inline namespace REBRAID_SIMD_NAMESPACE {
 /// counting as the least: rays outside it that move away.)
 /// A NaN in the ray answers a miss, as the traversal does. The portable kernels reject
 /// nothing here.
-/// `reciprocals` are those of ray.dir.
+/// `slab_terms` are those of ray.org and ray.dir.
 inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]] const Ray& ray,
-                            [[maybe_unused]] const DirectionReciprocals& reciprocals) {
+                            [[maybe_unused]] const SlabTerms& slab_terms) {
 #ifdef REBRAID_SIMD_AVX2
     static_assert(offsetof(Ray, tnear) == offsetof(Ray, org) + 12 &&
                   offsetof(Ray, tfar) == offsetof(Ray, dir) + 12);
@@ -36,13 +36,12 @@ inline bool misses_root_box([[maybe_unused]] const RootBox& box, [[maybe_unused]
     const int inside = _mm_movemask_ps(
         _mm_and_ps(_mm_cmp_ps(org, lower, _CMP_GE_OQ), _mm_cmp_ps(org, upper, _CMP_LE_OQ)));
     if ((inside & 7) == 7) return false;
-    const __m128 reciprocal = reciprocals.lanes;
+    const __m128 reciprocal = slab_terms.reciprocals;
     const __m128 is_negative = _mm_cmp_ps(reciprocal, _mm_setzero_ps(), _CMP_NGE_UQ);
     const __m128 near_plane = _mm_blendv_ps(lower, upper, is_negative);
     const __m128 far_plane = _mm_blendv_ps(upper, lower, is_negative);
-    // As TraversalRay forms them for the node test: the same floats in lanes 0-2.
-    __m128 near_shift, far_shift;
-    slab_shift_lanes(org, reciprocal, near_shift, far_shift);
+    // The node test's shifts: the same floats in lanes 0-2.
+    const __m128 near_shift = slab_terms.near_shifts, far_shift = slab_terms.far_shifts;
     // Lane 3 takes the ray's own interval, as the node test's fourth operand of max and min.
     const __m128 dir = _mm_loadu_ps(&ray.dir.x);  // lane 3: tfar
     const __m128 near = _mm_blend_ps(_mm_fmadd_ps(near_plane, reciprocal, near_shift), org, 8);

@@ -3,8 +3,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #include "rebraid/bvh/wide_node.h"
+#include "rebraid/core/ray.h"
 #include "rebraid/core/simd_config.h"
 #include "rebraid/core/types.h"
 
@@ -90,8 +92,9 @@ struct SlabShifts {
 /// SlabShifts of one axis (every kernel level forms them in this order: the same floats).
 inline void slab_shifts(float org, float rdir, float& near_shift, float& far_shift) {
     const float product = org * rdir;
-    const float margin = std::fmin(std::fmax(std::fabs(product) * kSlabShiftScale, 1.17549435e-38f),
-                                   3.40282347e+38f);
+    const float margin = std::fmin(
+        std::fmax(std::fabs(product) * kSlabShiftScale, std::numeric_limits<float>::min()),
+        std::numeric_limits<float>::max());
     near_shift = -(product + margin);
     far_shift = margin - product;
 }
@@ -101,24 +104,39 @@ inline void slab_shifts(float org, float rdir, float& near_shift, float& far_shi
 inline void slab_shift_lanes(__m128 org, __m128 reciprocal, __m128& near_shift, __m128& far_shift) {
     const __m128 product = _mm_mul_ps(org, reciprocal);
     const __m128 size = _mm_andnot_ps(_mm_set1_ps(-0.0f), product);
-    const __m128 margin = _mm_min_ps(
-        _mm_max_ps(_mm_mul_ps(size, _mm_set1_ps(kSlabShiftScale)), _mm_set1_ps(1.17549435e-38f)),
-        _mm_set1_ps(3.40282347e+38f));
+    const __m128 margin = _mm_min_ps(_mm_max_ps(_mm_mul_ps(size, _mm_set1_ps(kSlabShiftScale)),
+                                                _mm_set1_ps(std::numeric_limits<float>::min())),
+                                     _mm_set1_ps(std::numeric_limits<float>::max()));
     near_shift = _mm_xor_ps(_mm_add_ps(product, margin), _mm_set1_ps(-0.0f));
     far_shift = _mm_sub_ps(margin, product);
 }
 #endif
 
-/// The reciprocals of a ray's direction as the box tests take them (reciprocal_directions), made
-/// once per query: the root-box cull (misses_root_box) and the prepared world ray both read them,
-/// where each used to divide on its own (one division on the path of every ray from outside the
+/// The reciprocals of a ray's direction (reciprocal_directions) and the slab shifts of its
+/// origin (slab_shift_lanes) as the box tests take them, made once per query: the root-box cull
+/// (misses_root_box) and the prepared world ray both read them, where each used to form them
+/// on its own (a division and the shifts twice on the path of every ray from outside the
 /// scene's box). The portable kernels compute them in TraversalRay.
-struct DirectionReciprocals {
+struct SlabTerms {
 #ifdef REBRAID_SIMD_AVX2
-    __m128 lanes;  ///< x, y, z, then 1
-    explicit DirectionReciprocals(Vec3f direction) : lanes(reciprocal_directions(direction)) {}
+    __m128 reciprocals;  ///< x, y, z, then 1
+    __m128 near_shifts;  ///< SlabShifts::near in lanes 0-2
+    __m128 far_shifts;   ///< SlabShifts::far in lanes 0-2
+    SlabTerms(Vec3f origin, Vec3f direction)
+        : SlabTerms(_mm_setr_ps(origin.x, origin.y, origin.z, 0.0f), direction) {}
+    /// Of a query's ray: its origin in one load (lane 3, tnear, goes into no answer), so the
+    /// shifts a ray from outside the scene's box waits on before the cull start at once.
+    explicit SlabTerms(const Ray& ray) : SlabTerms(_mm_loadu_ps(&ray.org.x), ray.dir) {
+        static_assert(offsetof(Ray, tnear) == offsetof(Ray, org) + 12);
+    }
+
+private:
+    SlabTerms(__m128 origin, Vec3f direction) : reciprocals(reciprocal_directions(direction)) {
+        slab_shift_lanes(origin, reciprocals, near_shifts, far_shifts);
+    }
 #else
-    explicit DirectionReciprocals(Vec3f) {}
+    SlabTerms(Vec3f, Vec3f) {}
+    explicit SlabTerms(const Ray&) {}
 #endif
 };
 
@@ -138,29 +156,26 @@ struct TraversalRay {
     SlabShifts shifts;
 
     TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far)
-        : TraversalRay(origin, direction, t_near, t_far, DirectionReciprocals(direction)) {}
-    /// With the reciprocals of `direction` already made.
+        : TraversalRay(origin, direction, t_near, t_far, SlabTerms(origin, direction)) {}
+    /// With the slab terms of `origin` and `direction` already made.
     TraversalRay(Vec3f origin, Vec3f direction, float t_near, float t_far,
-                 [[maybe_unused]] const DirectionReciprocals& reciprocals)
+                 [[maybe_unused]] const SlabTerms& slab_terms)
         : org(origin), dir(direction), tnear(t_near), tfar(t_far) {
 #ifdef REBRAID_SIMD_AVX2
         // The three axes in the lanes of one register: every ray and every entry into an
         // instance's space pays this set-up, and the scalar form (a branch and a division per
         // axis) cost as many instructions as a rejected ray's whole traversal. Same IEEE
         // operations per lane, so the same reciprocals.
-        const __m128 reciprocal = reciprocals.lanes;
+        const __m128 reciprocal = slab_terms.reciprocals;
         alignas(16) float lanes[4];
         _mm_store_ps(lanes, reciprocal);
         rdir = {lanes[0], lanes[1], lanes[2]};
         negative_axes =
             std::uint32_t(_mm_movemask_ps(_mm_cmp_ps(reciprocal, _mm_setzero_ps(), _CMP_NGE_UQ))) &
             7u;
-        __m128 near_shift, far_shift;
-        slab_shift_lanes(_mm_setr_ps(origin.x, origin.y, origin.z, 0.0f), reciprocal, near_shift,
-                         far_shift);
         alignas(16) float near_lanes[4], far_lanes[4];
-        _mm_store_ps(near_lanes, near_shift);
-        _mm_store_ps(far_lanes, far_shift);
+        _mm_store_ps(near_lanes, slab_terms.near_shifts);
+        _mm_store_ps(far_lanes, slab_terms.far_shifts);
         shifts = {{near_lanes[0], near_lanes[1], near_lanes[2]},
                   {far_lanes[0], far_lanes[1], far_lanes[2]}};
 #else

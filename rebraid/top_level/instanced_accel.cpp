@@ -223,8 +223,8 @@ void InstancedAccel::set_world_to_object(std::span<const AffineTransform> world_
     for (std::size_t i = 0; i < instance_targets_.size(); ++i)
         if (instance_targets_[i].space != InstanceTarget::kWorldSpace)
             instance_targets_[i].to_object = world_to_object[i];
+    // The root box stays: it depends on the structure and the cull setting only.
     refresh_sole_item();
-    refresh_root_box();
 }
 
 void InstancedAccel::set_triangle_test(TriangleTest test) {

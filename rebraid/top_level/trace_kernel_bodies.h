@@ -31,12 +31,12 @@ inline void count_root_visit(TraversalCounters* counters) {
 template <TriangleTest kTest>
 Hit flat_closest_hit(const FlatAccel& accel, const Ray& ray, TraversalCounters* counters) {
     Hit hit;  // one object every return names: no copy between the returns
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) {
         count_root_visit(counters);
         return hit;
     }
-    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
     // Where the leaf rows name instance and primID in one word (FlatHitIds), the closest hit's
     // word comes from the leaf just tested. Otherwise world triangles are numbered in leaf
     // order, the hit's leaf position indexes the tables, and since that lookup after the
@@ -77,9 +77,9 @@ template <TriangleTest kTest>
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool flat_occluded(const FlatAccel& accel, const Ray& ray) {
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
-    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) return false;
+    PreparedRay traversal_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
     return occluded_object_bvh<kTest>(accel.bvh(), accel.bvh().root, traversal_ray, nullptr);
 }
 
@@ -187,12 +187,11 @@ struct SoleItemStart {
     StartLeaf start_leaf;
     std::optional<PreparedRay> ray;
 
-    /// `reciprocals` are those of world_ray.dir.
-    SoleItemStart(const InstancedAccel& accel, const Ray& world_ray,
-                  const DirectionReciprocals& reciprocals)
+    /// `slab_terms` are those of world_ray.
+    SoleItemStart(const InstancedAccel& accel, const Ray& world_ray, const SlabTerms& slab_terms)
         : item(accel.sole_item()), start_leaf(start_leaf_of(accel.top_level())) {
         if (item.target.space == InstanceTarget::kWorldSpace) {
-            ray.emplace(world_ray.org, world_ray.dir, world_ray.tnear, world_ray.tfar, reciprocals);
+            ray.emplace(world_ray.org, world_ray.dir, world_ray.tnear, world_ray.tfar, slab_terms);
             return;
         }
         Vec3f org, dir;
@@ -207,14 +206,14 @@ template <TriangleTest kTest>
 Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                           HitTriangle* located, const CloserHitObserver* observer) {
     Hit hit;  // one object every return names: no copy between the returns
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) {
         // Counted as the query it stands in for: the entry, then its root's box test.
         if (counters) ++counters->object_entries;
         count_root_visit(counters);
         return hit;
     }
-    SoleItemStart start(accel, ray, reciprocals);
+    SoleItemStart start(accel, ray, slab_terms);
     if (counters) ++counters->object_entries;
     if (intersect_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, hit, counters,
                                     located, closer_hit_notifier(observer, start.item.instance),
@@ -225,9 +224,9 @@ Hit sole_item_closest_hit(const InstancedAccel& accel, const Ray& ray, Traversal
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool sole_item_occluded(const InstancedAccel& accel, const Ray& ray) {
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
-    SoleItemStart start(accel, ray, reciprocals);
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) return false;
+    SoleItemStart start(accel, ray, slab_terms);
     return occluded_object_bvh<kTest>(start.item.bvh, start.item.node, *start.ray, nullptr,
                                       start.start_leaf);
 }
@@ -375,12 +374,12 @@ template <TriangleTest kTest>
 Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                           HitTriangle* located, const CloserHitObserver* observer) {
     Hit hit;  // one object every return names: no copy between the returns
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) {
         count_root_visit(counters);
         return hit;
     }
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
     ObjectRayCache object_rays(world_ray);
     const TopLevelBvh& top = accel.top_level();
     const InstanceTarget* targets = accel.instance_targets().data();
@@ -402,9 +401,9 @@ Hit instanced_closest_hit(const InstancedAccel& accel, const Ray& ray, Traversal
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool instanced_occluded(const InstancedAccel& accel, const Ray& ray) {
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) return false;
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
     ObjectRayCache object_rays(world_ray);
     const ItemEntries entries(accel);
     // Any order: the first hit ends the query.
@@ -618,14 +617,14 @@ template <TriangleTest kTest, class Lanes>
         source, refs, slots, TriangleGroupRay(object_org, object_dir), tnear, tfar);
 }
 
-/// Enters the items of top-level leaf `leaf` for the world ray `ray` (its reciprocals
-/// `reciprocals`) ending at `tfar`, as instanced_closest_hit does.
+/// Enters the items of top-level leaf `leaf` for the world ray `ray` (its slab terms
+/// `slab_terms`) ending at `tfar`, as instanced_closest_hit does.
 template <TriangleTest kTest>
 [[gnu::noinline, gnu::flatten]] OutOfLineHit closest_in_items(
-    const ItemEntries& entries, NodeRef leaf, const Ray& ray,
-    const DirectionReciprocals& reciprocals, float tfar, TraversalCounters* counters,
-    HitTriangle* located, const CloserHitObserver* observer) {
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, tfar, reciprocals);
+    const ItemEntries& entries, NodeRef leaf, const Ray& ray, const SlabTerms& slab_terms,
+    float tfar, TraversalCounters* counters, HitTriangle* located,
+    const CloserHitObserver* observer) {
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, tfar, slab_terms);
     ObjectRayCache object_rays(world_ray);
     OutOfLineHit result;
     result.found = entries.closest<kTest>(leaf, object_rays, world_ray, result.hit, counters,
@@ -637,8 +636,8 @@ template <TriangleTest kTest>
 template <TriangleTest kTest>
 [[gnu::noinline, gnu::flatten]] bool occluded_in_items(const ItemEntries& entries, NodeRef leaf,
                                                        const Ray& ray,
-                                                       const DirectionReciprocals& reciprocals) {
-    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+                                                       const SlabTerms& slab_terms) {
+    PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
     ObjectRayCache object_rays(world_ray);
     return entries.occluded<kTest>(leaf, object_rays);
 }
@@ -650,15 +649,15 @@ template <TriangleTest kTest>
 template <TriangleTest kTest, bool kItemsOutOfLine>
 Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                        HitTriangle* located, const CloserHitObserver* observer) {
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) {
         count_root_visit(counters);
         return Hit{};
     }
     const MergedTopLevel& merged = accel.merged_top_level();
     return with_merged_lanes(merged, [&]<class Lanes>() {
         Hit hit;
-        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
         ObjectRayCache object_rays(world_ray);  // for the items and leaves tested in the loop
         const ItemEntries entries(accel);
         // A hit in a merged object leaf read from the corner storage keeps its leaf-order
@@ -693,7 +692,7 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
         };
         const auto items = [&](NodeRef leaf) {
             if constexpr (kItemsOutOfLine) {
-                take(closest_in_items<kTest>(entries, leaf, ray, reciprocals, world_ray.ray.tfar,
+                take(closest_in_items<kTest>(entries, leaf, ray, slab_terms, world_ray.ray.tfar,
                                              counters, located, observer));
             } else if (entries.closest<kTest>(leaf, object_rays, world_ray, hit, counters, located,
                                               observer)) {
@@ -716,11 +715,11 @@ Hit merged_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCou
 
 template <TriangleTest kTest, bool kItemsOutOfLine>
 [[gnu::flatten]] bool merged_occluded(const InstancedAccel& accel, const Ray& ray) {
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) return false;
     const MergedTopLevel& merged = accel.merged_top_level();
     return with_merged_lanes(merged, [&]<class Lanes>() {
-        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
         ObjectRayCache object_rays(world_ray);  // for the items and leaves tested in the loop
         const ItemEntries entries(accel);
         const auto object_leaves = [&](const MergedLeafSource& source, const NodeRef* refs,
@@ -739,7 +738,7 @@ template <TriangleTest kTest, bool kItemsOutOfLine>
         };
         const auto items = [&](NodeRef leaf) {
             if constexpr (kItemsOutOfLine)
-                return occluded_in_items<kTest>(entries, leaf, ray, reciprocals);
+                return occluded_in_items<kTest>(entries, leaf, ray, slab_terms);
             else
                 return entries.occluded<kTest>(leaf, object_rays);
         };
@@ -758,15 +757,15 @@ template <TriangleTest kTest, bool kItemsOutOfLine>
 template <TriangleTest kTest>
 Hit world_tree_closest_hit(const InstancedAccel& accel, const Ray& ray, TraversalCounters* counters,
                            HitTriangle* located, const CloserHitObserver* observer) {
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) {
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) {
         count_root_visit(counters);
         return Hit{};
     }
     const MergedTopLevel& tree = accel.merged_top_level();
     return with_merged_lanes(tree, [&]<class Lanes>() {
         Hit hit;
-        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
         ObjectRayCache object_rays(world_ray);
         const PrimId* hit_prim_ids = nullptr;
         // Every source's leaves are in the same arrays: the rows' address never waits on the
@@ -790,11 +789,11 @@ Hit world_tree_closest_hit(const InstancedAccel& accel, const Ray& ray, Traversa
 
 template <TriangleTest kTest>
 [[gnu::flatten]] bool world_tree_occluded(const InstancedAccel& accel, const Ray& ray) {
-    const DirectionReciprocals reciprocals(ray.dir);
-    if (misses_root_box(accel.root_box(), ray, reciprocals)) return false;
+    const SlabTerms slab_terms(ray);
+    if (misses_root_box(accel.root_box(), ray, slab_terms)) return false;
     const MergedTopLevel& tree = accel.merged_top_level();
     return with_merged_lanes(tree, [&]<class Lanes>() {
-        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, reciprocals);
+        PreparedRay world_ray(ray.org, ray.dir, ray.tnear, ray.tfar, slab_terms);
         ObjectRayCache object_rays(world_ray);
         Lanes lanes = source_lanes<Lanes>(tree.sources.front());  // every source's arrays
         const auto leaves = [&](const MergedLeafSource& source, const NodeRef* refs,

@@ -45,7 +45,7 @@ TEST(RootBoxCull, NeverRejectsARayTheRootsSlabTestLetsIntoAChild) {
             bool any_child = false;
             for (int c = 0; c < nodes[0].child_count(); ++c)
                 any_child = any_child || enters(prepared, nodes[0].child_bounds(c));
-            const bool misses = misses_root_box(box, ray, DirectionReciprocals(ray.dir));
+            const bool misses = misses_root_box(box, ray, SlabTerms(ray.org, ray.dir));
             if (any_child) {
                 ++entered;
                 ASSERT_FALSE(misses)
@@ -70,7 +70,7 @@ TEST(RootBoxCull, RejectsNothingWhereTheRootIsALeaf) {
     const RootBox box = root_box_of(nodes, NodeRef::leaf(0, 3));
     for (const Vec3f org : {Vec3f{0, 0, 0}, Vec3f{1e30f, -1e30f, 5}, Vec3f{-7, 3, 1e20f}})
         EXPECT_FALSE(
-            misses_root_box(box, Ray{org, 0.0f, {1, 0, 0}, 1.0f}, DirectionReciprocals({1, 0, 0})));
+            misses_root_box(box, Ray{org, 0.0f, {1, 0, 0}, 1.0f}, SlabTerms(org, {1, 0, 0})));
 }
 
 }  // namespace
