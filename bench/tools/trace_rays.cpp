@@ -1,4 +1,4 @@
-// trace_rays SCENE RAYS... ACCEL[,ACCEL...]: builds each structure over a glTF scene (or
+// trace_rays [OPTIONS] SCENE RAYS... ACCEL[,ACCEL...]: builds each structure over a glTF scene (or
 // `default`), traces each ray file through it on one thread (one trace_all call per file and
 // structure, in order) and prints what it found, one line per file and structure. A
 // deterministic workload for instruction counts, free of the libraries the `rebraid` command
@@ -17,6 +17,9 @@
 //                   file's trace_all; callgrind would count that pass with the next file's
 //                   trace_all, so leave the option out when counting instructions.
 //   --closest-only  trace closest hits only (no occlusion query per ray).
+//   --located       trace the closest hits of instanced structures (InstancedAccel) with their
+//                   located query, as the Embree glue asks them (the hit triangle's place,
+//                   corners and Möller terms kept too); other structures as without it.
 //   --rounds N      also time N rounds per file, the structures taking turns within each round
 //                   (so that a change in machine load hits them alike), and give each one's
 //                   median Mrays/s and the median of its rounds' ratios to the first structure.
@@ -47,6 +50,7 @@ struct TraceSummary {
 /// in its own form (Hit, or the batch's RTCRayHit), read only after the trace.
 struct TracedAccel {
     const rebraid::Accel& accel;
+    const rebraid::InstancedAccel* located;  // traced with its located query when not null
     std::optional<rebraid::glue::EmbreeRayBatch> embree_rays;
     std::vector<rebraid::Hit> hits;       // the project's structures
     std::vector<unsigned char> occluded;  // the project's structures
@@ -64,7 +68,13 @@ struct TracedAccel {
         if (!closest_only) batch.occlude(0, rays.size());
         return;
     }
-    for (std::size_t i = 0; i < rays.size(); ++i) traced.hits[i] = traced.accel.intersect(rays[i]);
+    if (traced.located != nullptr) {
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            traced.hits[i] = traced.located->intersect_located(rays[i], nullptr).hit;
+    } else {
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            traced.hits[i] = traced.accel.intersect(rays[i]);
+    }
     if (closest_only) return;
     for (std::size_t i = 0; i < rays.size(); ++i)
         traced.occluded[i] = traced.accel.occluded(rays[i]) ? 1 : 0;
@@ -113,7 +123,7 @@ std::vector<std::string> split_list(const std::string& list) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    bool counts_work = false, closest_only = false;
+    bool counts_work = false, closest_only = false, located = false;
     int rounds = 0;
     int first = 1;
     for (; first < argc; ++first) {
@@ -122,6 +132,8 @@ int main(int argc, char** argv) {
             counts_work = true;
         } else if (arg == "--closest-only") {
             closest_only = true;
+        } else if (arg == "--located") {
+            located = true;
         } else if (arg == "--rounds" && first + 1 < argc) {
             rounds = std::max(0, std::atoi(argv[++first]));
         } else {
@@ -130,7 +142,7 @@ int main(int argc, char** argv) {
     }
     if (argc - first < 3) {
         std::fprintf(stderr,
-                     "usage: trace_rays [--count-work] [--closest-only] [--rounds N] "
+                     "usage: trace_rays [--count-work] [--closest-only] [--located] [--rounds N] "
                      "SCENE|default RAYS... ACCEL[,ACCEL...]\n");
         return 1;
     }
@@ -149,7 +161,12 @@ int main(int argc, char** argv) {
         for (const std::vector<rebraid::Ray>& rays : ray_sets) {
             std::vector<TracedAccel> traced;
             for (const auto& accel : accels) {
-                traced.push_back({*accel, std::nullopt, {}, {}});
+                traced.push_back(
+                    {*accel,
+                     located ? dynamic_cast<const rebraid::InstancedAccel*>(accel.get()) : nullptr,
+                     std::nullopt,
+                     {},
+                     {}});
                 if (rebraid::glue::EmbreeRayBatch::serves(*accel)) {
                     traced.back().embree_rays.emplace(*accel, rays);
                 } else {
