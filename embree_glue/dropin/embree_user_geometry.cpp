@@ -15,6 +15,9 @@ void bounds_callback(const RTCBoundsFunctionArguments* args) {
                        bounds.max.x, bounds.max.y, bounds.max.z, 0.0f};
 }
 
+// The callbacks screen each ray (intersect1, occluded1) although Embree knows the primitive's
+// box: its BVH over the one primitive is a leaf, so it calls them for every ray it traces.
+
 void intersect_callback(const RTCIntersectFunctionNArguments* args) {
     const EmbreeAccel& accel = accel_of(args->geometryUserPtr);
     if (args->N == 1) {
