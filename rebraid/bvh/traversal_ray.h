@@ -124,9 +124,11 @@ struct SlabTerms {
     __m128 far_shifts;   ///< SlabShifts::far in lanes 0-2
     SlabTerms(Vec3f origin, Vec3f direction)
         : SlabTerms(_mm_setr_ps(origin.x, origin.y, origin.z, 0.0f), direction) {}
-    /// Of a query's ray: its origin in one load (lane 3, tnear, goes into no answer), so the
-    /// shifts a ray from outside the scene's box waits on before the cull start at once.
-    explicit SlabTerms(const Ray& ray) : SlabTerms(_mm_loadu_ps(&ray.org.x), ray.dir) {
+    /// Of a query's ray: its origin in one load, lane 3 (tnear) cleared so that no value of
+    /// it (a denormal costs a multiplication an assist) reaches the arithmetic, and the shifts
+    /// a ray from outside the scene's box waits on before the cull start at once.
+    explicit SlabTerms(const Ray& ray)
+        : SlabTerms(_mm_blend_ps(_mm_loadu_ps(&ray.org.x), _mm_setzero_ps(), 8), ray.dir) {
         static_assert(offsetof(Ray, tnear) == offsetof(Ray, org) + 12);
     }
 
