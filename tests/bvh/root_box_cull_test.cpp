@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -63,6 +65,45 @@ TEST(RootBoxCull, NeverRejectsARayTheRootsSlabTestLetsIntoAChild) {
 #else
     EXPECT_EQ(rejected, 0u);  // the portable kernels leave every ray to the traversal
 #endif
+}
+
+TEST(SlabTerms, AQueryRaysTermsAreThoseOfItsOriginAndDirectionWhateverItsTnear) {
+    // The query's form reads the ray's origin with tnear beside it in one load; tnear must
+    // reach none of the terms (a denormal would cost the multiplications an assist).
+    std::mt19937 random(23);
+    const std::vector<WideNode> nodes = test::random_root(random, 8);
+    const float tnears[] = {0.0f, 1e-40f, 0.5f, std::numeric_limits<float>::infinity(),
+                            std::numeric_limits<float>::quiet_NaN()};
+    std::size_t checked = 0;
+    for (Ray ray : test::rays_around(random, nodes[0])) {
+        for (const float tnear : tnears) {
+            ray.tnear = tnear;
+            const SlabTerms from_ray(ray), from_parts(ray.org, ray.dir);
+#ifdef REBRAID_SIMD_AVX2
+            const auto same_bits = [](__m128 a, __m128 b) {
+                return _mm_movemask_epi8(
+                           _mm_cmpeq_epi32(_mm_castps_si128(a), _mm_castps_si128(b))) == 0xffff;
+            };
+            ASSERT_TRUE(same_bits(from_ray.reciprocals, from_parts.reciprocals));
+            ASSERT_TRUE(same_bits(from_ray.near_shifts, from_parts.near_shifts));
+            ASSERT_TRUE(same_bits(from_ray.far_shifts, from_parts.far_shifts));
+#endif
+            // And the prepared ray is the one made without shared terms.
+            const TraversalRay shared(ray.org, ray.dir, ray.tnear, ray.tfar, from_ray);
+            const TraversalRay alone(ray.org, ray.dir, ray.tnear, ray.tfar);
+            for (int a = 0; a < 3; ++a) {
+                ASSERT_EQ(std::bit_cast<std::uint32_t>(shared.rdir[a]),
+                          std::bit_cast<std::uint32_t>(alone.rdir[a]));
+                ASSERT_EQ(std::bit_cast<std::uint32_t>(shared.shifts.near[a]),
+                          std::bit_cast<std::uint32_t>(alone.shifts.near[a]));
+                ASSERT_EQ(std::bit_cast<std::uint32_t>(shared.shifts.far[a]),
+                          std::bit_cast<std::uint32_t>(alone.shifts.far[a]));
+            }
+            ASSERT_EQ(shared.negative_axes, alone.negative_axes);
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, 1000u);
 }
 
 TEST(RootBoxCull, RejectsNothingWhereTheRootIsALeaf) {
